@@ -1,0 +1,54 @@
+//! Rigid-body dynamics of serial robot arms loaded from URDF.
+//!
+//! An immutable [`Model`] is built once from a URDF (a chain between a base and a tip
+//! link); a mutable [`Data`] workspace is built once from it and passed to every
+//! algorithm, which writes its result into `Data` and returns a reference to it. After
+//! construction no algorithm allocates, performs I/O or panics: argument lengths are
+//! checked and reported as [`DimensionError`].
+//!
+//! Conventions: SI units; results in the base frame; 6-vectors (Jacobian rows,
+//! wrenches, `Jdot qdot`) put the linear part first; gravity `(0, 0, -9.81)` unless
+//! [`Model::gravity`] is changed. `M(q) qddot + C(q, qdot) qdot + G(q) = tau` is METHOD.md
+//! eq. 1 without friction, deadzone or environment (those belong to the simulator).
+//!
+//! ```
+//! use admittance_dynamics::{Model, Data, rnea, crba};
+//! let model = Model::from_urdf_file("../../models/baxter_left_arm.urdf".as_ref(), Some("base"), Some("left_hand")).unwrap();
+//! let mut data = Data::new(&model);
+//! let q = [0.0, -0.5, 0.0, 1.0, 0.0, 0.5, 0.0];
+//! let tau = rnea(&model, &mut data, &q, &[0.0; 7], &[0.0; 7]).unwrap().clone();
+//! let m = crba(&model, &mut data, &q).unwrap();
+//! assert!(m[(0, 0)] > 0.0 && tau.iter().all(|t| t.is_finite()));
+//! ```
+
+pub mod algorithms;
+mod data;
+mod error;
+mod model;
+pub mod spatial;
+mod urdf;
+
+pub use algorithms::aba::{aba, aba_with_tip_wrench};
+pub use algorithms::coriolis::coriolis_matrix;
+pub use algorithms::crba::crba;
+pub use algorithms::energy::{kinetic_energy, potential_energy};
+pub use algorithms::jacobian::{frame_jacobian, frame_jdot_qdot, tip_jacobian, tip_jdot_qdot};
+pub use algorithms::kinematics::{forward_kinematics, update_frame_placements};
+pub use algorithms::rnea::{gravity_torque, nonlinear_effects, rnea, rnea_with_tip_wrench};
+pub use data::Data;
+pub use error::{DimensionError, DynamicsError, UrdfError};
+pub use model::{Frame, Joint, JointKind, JointLimits, LinkMass, Model, Payload};
+pub use spatial::{Force, Inertia, Motion, Transform};
+
+impl Model {
+    /// Loads the chain between `base` (default: the root link) and `tip` (default: the
+    /// single leaf link) from a URDF file.
+    pub fn from_urdf_file(path: &std::path::Path, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+        urdf::load_file(path, base, tip)
+    }
+
+    /// Loads the chain from URDF text; `source` names the text in error messages.
+    pub fn from_urdf_str(text: &str, source: &str, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+        urdf::load_str(text, source, base, tip)
+    }
+}

@@ -1,0 +1,278 @@
+//! The immutable description of a serial arm, built once (from a URDF) and shared by
+//! every algorithm. Mutable per-call state lives in [`crate::Data`].
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::error::DynamicsError;
+use crate::spatial::{axis_angle, Inertia, Motion, Transform};
+
+/// The kinds of moving joint the chain supports. Fixed joints are folded away at load
+/// time (their child's inertia joins the moving body, their frames stay addressable).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the axis, with position limits.
+    Revolute,
+    /// Rotation about the axis without position limits (the coordinate is the angle).
+    Continuous,
+    /// Translation along the axis.
+    Prismatic,
+}
+
+impl JointKind {
+    /// The URDF spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+        }
+    }
+}
+
+/// Position, velocity and effort limits of a joint (URDF `<limit>`). Absent limits are
+/// infinite (continuous joints have no position limits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointLimits {
+    /// Lower position limit (rad or m).
+    pub lower: f64,
+    /// Upper position limit (rad or m).
+    pub upper: f64,
+    /// Velocity limit (rad/s or m/s).
+    pub velocity: f64,
+    /// Effort limit (N m or N).
+    pub effort: f64,
+}
+
+impl Default for JointLimits {
+    fn default() -> Self {
+        Self {
+            lower: f64::NEG_INFINITY,
+            upper: f64::INFINITY,
+            velocity: f64::INFINITY,
+            effort: f64::INFINITY,
+        }
+    }
+}
+
+/// One moving joint of the chain and the rigid body it carries.
+#[derive(Clone, Debug)]
+pub struct Joint {
+    /// The URDF joint name.
+    pub name: String,
+    /// Revolute, continuous or prismatic.
+    pub kind: JointKind,
+    /// Unit axis in the joint frame.
+    pub axis: Vector3<f64>,
+    /// Placement of the joint frame (at q = 0) in the previous moving body's frame (or the
+    /// base frame for the first joint), fixed joints in between included.
+    pub placement: Transform,
+    /// Limits from `<limit>`.
+    pub limits: JointLimits,
+    /// Viscous damping from `<dynamics damping>` (N m s/rad or N s/m).
+    pub damping: f64,
+    /// Static friction from `<dynamics friction>` (N m or N).
+    pub friction: f64,
+    /// The URDF link that this joint moves.
+    pub child_link: String,
+}
+
+impl Joint {
+    /// The joint's motion subspace in its own frame (the unit twist of `qdot = 1`).
+    #[inline(always)]
+    pub fn motion_subspace(&self) -> Motion {
+        match self.kind {
+            JointKind::Prismatic => Motion { linear: self.axis, angular: Vector3::zeros() },
+            _ => Motion { linear: Vector3::zeros(), angular: self.axis },
+        }
+    }
+
+    /// Placement of the joint frame at coordinate `q` in the parent body's frame.
+    #[inline(always)]
+    pub fn transform(&self, q: f64) -> Transform {
+        match self.kind {
+            JointKind::Prismatic => Transform {
+                rotation: self.placement.rotation,
+                translation: self.placement.translation + self.placement.rotation * (self.axis * q),
+            },
+            _ => Transform {
+                rotation: self.placement.rotation * axis_angle(&self.axis, q),
+                translation: self.placement.translation,
+            },
+        }
+    }
+}
+
+/// A named frame on the chain: a URDF link (the moving bodies' own links, links behind
+/// fixed joints, and links of the base).
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// The URDF link name.
+    pub name: String,
+    /// The moving joint whose body carries this frame; `None` for frames fixed to the base.
+    pub parent_joint: Option<usize>,
+    /// Placement in the carrying body's frame (or the base frame).
+    pub placement: Transform,
+}
+
+/// Mass of one URDF link and the body it was folded into.
+#[derive(Clone, Debug)]
+pub struct LinkMass {
+    /// The URDF link name.
+    pub link: String,
+    /// Its mass (kg); zero when the link has no `<inertial>`.
+    pub mass: f64,
+    /// The moving joint whose body carries it; `None` when it is part of the base.
+    pub joint: Option<usize>,
+}
+
+/// A rigid payload attached at the tip frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Payload {
+    /// Mass (kg).
+    pub mass: f64,
+    /// Centre of mass in the tip frame (m).
+    pub com: Vector3<f64>,
+    /// Rotational inertia about the centre of mass, tip-frame axes (kg m^2).
+    pub inertia: Matrix3<f64>,
+}
+
+impl Payload {
+    /// A point mass at `com` in the tip frame.
+    pub fn point_mass(mass: f64, com: Vector3<f64>) -> Self {
+        Self { mass, com, inertia: Matrix3::zeros() }
+    }
+}
+
+/// A serial kinematic chain with its inertial parameters (the immutable half of the
+/// Pinocchio-style `Model`/`Data` split).
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// The URDF `<robot name>`.
+    pub robot_name: String,
+    /// Where the model came from (file path or a source name).
+    pub source: String,
+    /// The base link: the frame every result is expressed in.
+    pub base_link: String,
+    /// Moving joints in chain order (index = coordinate index).
+    pub joints: Vec<Joint>,
+    /// Inertia of the body each joint moves, in that joint's frame (fixed children folded in).
+    pub bodies: Vec<Inertia>,
+    /// Every addressable frame (URDF link) on the chain.
+    pub frames: Vec<Frame>,
+    /// Index into `frames` of the tip frame.
+    pub tip_frame: usize,
+    /// Gravity in the base frame (default `(0, 0, -9.81)`).
+    pub gravity: Vector3<f64>,
+    /// Masses of the chain's links, for summaries.
+    pub link_masses: Vec<LinkMass>,
+    /// Links of the URDF that hang off the chain through moving joints not on the chain
+    /// and are therefore not part of this model (their mass is ignored).
+    pub excluded_links: Vec<String>,
+}
+
+impl Model {
+    /// Number of moving joints (= coordinates = velocities).
+    #[inline(always)]
+    pub fn nq(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Joint names in chain order.
+    pub fn joint_names(&self) -> impl Iterator<Item = &str> {
+        self.joints.iter().map(|j| j.name.as_str())
+    }
+
+    /// Index of a moving joint by name.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Index of a frame (URDF link) by name.
+    pub fn frame_index(&self, name: &str) -> Option<usize> {
+        self.frames.iter().position(|f| f.name == name)
+    }
+
+    /// The tip frame.
+    pub fn tip(&self) -> &Frame {
+        &self.frames[self.tip_frame]
+    }
+
+    /// Total mass carried by the moving joints (kg).
+    pub fn total_moving_mass(&self) -> f64 {
+        self.bodies.iter().map(|b| b.mass).sum()
+    }
+
+    /// A copy with every body's mass and inertia multiplied by `scale` (e.g. 1.2 for the
+    /// "20 % heavier than the nominal model" true arm of a simulation).
+    pub fn with_scaled_inertias(&self, scale: f64) -> Result<Model, DynamicsError> {
+        self.with_body_scales(&vec![scale; self.nq()])
+    }
+
+    /// A copy with body `i`'s mass and inertia (about the joint frame) multiplied by
+    /// `scales[i]`. Scaling mass and inertia together keeps the centre of mass in place.
+    pub fn with_body_scales(&self, scales: &[f64]) -> Result<Model, DynamicsError> {
+        if scales.len() != self.nq() {
+            return Err(DynamicsError::InvalidArgument(format!(
+                "{} body scales given for a model with {} joints",
+                scales.len(),
+                self.nq()
+            )));
+        }
+        if let Some(s) = scales.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+            return Err(DynamicsError::InvalidArgument(format!(
+                "body scale {s} is not a positive finite number"
+            )));
+        }
+        let mut out = self.clone();
+        for (body, s) in out.bodies.iter_mut().zip(scales) {
+            body.mass *= s;
+            body.first_moment *= *s;
+            body.rotational *= *s;
+        }
+        for lm in &mut out.link_masses {
+            if let Some(j) = lm.joint {
+                lm.mass *= scales[j];
+            }
+        }
+        Ok(out)
+    }
+
+    /// A copy carrying `payload` rigidly at the tip frame.
+    pub fn with_payload(&self, payload: &Payload) -> Result<Model, DynamicsError> {
+        let ok = payload.mass.is_finite()
+            && payload.mass >= 0.0
+            && payload.com.iter().all(|v| v.is_finite())
+            && payload.inertia.iter().all(|v| v.is_finite());
+        if !ok {
+            return Err(DynamicsError::InvalidArgument(
+                "payload mass must be finite and non-negative, com and inertia finite".into(),
+            ));
+        }
+        let tip = self.tip().clone();
+        let Some(joint) = tip.parent_joint else {
+            return Err(DynamicsError::InvalidArgument(format!(
+                "the tip frame '{}' is fixed to the base: a payload there moves nothing",
+                tip.name
+            )));
+        };
+        let local = Inertia::from_com(payload.mass, payload.com, payload.inertia);
+        let mut out = self.clone();
+        out.bodies[joint] = out.bodies[joint].add(&local.transformed(&tip.placement));
+        out.link_masses.push(LinkMass {
+            link: format!("payload@{}", tip.name),
+            mass: payload.mass,
+            joint: Some(joint),
+        });
+        Ok(out)
+    }
+
+    /// Lower and upper position limits per joint.
+    pub fn position_limits(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.joints.iter().map(|j| (j.limits.lower, j.limits.upper))
+    }
+
+    /// Effort limit per joint (infinite when the URDF gives none).
+    pub fn effort_limits(&self) -> impl Iterator<Item = f64> + '_ {
+        self.joints.iter().map(|j| j.limits.effort)
+    }
+}
