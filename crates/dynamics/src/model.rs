@@ -95,10 +95,30 @@ impl Joint {
                 translation: self.placement.translation + self.placement.rotation * (self.axis * q),
             },
             _ => Transform {
-                rotation: self.placement.rotation * axis_angle(&self.axis, q),
+                rotation: rotate_about_axis(&self.placement.rotation, &self.axis, q),
                 translation: self.placement.translation,
             },
         }
+    }
+}
+
+/// `p * R(axis, q)`, with the common case of a coordinate axis (most URDFs) done on
+/// columns instead of a full Rodrigues rotation and 3x3 product.
+#[inline(always)]
+fn rotate_about_axis(p: &Matrix3<f64>, axis: &Vector3<f64>, q: f64) -> Matrix3<f64> {
+    let (s, c) = q.sin_cos();
+    let (c0, c1, c2) = (p.column(0), p.column(1), p.column(2));
+    if axis.x == 0.0 && axis.y == 0.0 {
+        let s = s * axis.z;
+        Matrix3::from_columns(&[c0 * c + c1 * s, c1 * c - c0 * s, c2.into_owned()])
+    } else if axis.y == 0.0 && axis.z == 0.0 {
+        let s = s * axis.x;
+        Matrix3::from_columns(&[c0.into_owned(), c1 * c + c2 * s, c2 * c - c1 * s])
+    } else if axis.x == 0.0 && axis.z == 0.0 {
+        let s = s * axis.y;
+        Matrix3::from_columns(&[c0 * c - c2 * s, c1.into_owned(), c2 * c + c0 * s])
+    } else {
+        p * axis_angle(axis, q)
     }
 }
 

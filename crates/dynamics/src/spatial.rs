@@ -113,10 +113,9 @@ impl Transform {
     /// Expresses a parent-frame motion in the child frame.
     #[inline(always)]
     pub fn act_inv_motion(&self, m: &Motion) -> Motion {
-        let rt = self.rotation.transpose();
         Motion {
-            linear: rt * (m.linear - self.translation.cross(&m.angular)),
-            angular: rt * m.angular,
+            linear: self.rotation.tr_mul(&(m.linear - self.translation.cross(&m.angular))),
+            angular: self.rotation.tr_mul(&m.angular),
         }
     }
 
@@ -130,10 +129,9 @@ impl Transform {
     /// Expresses a parent-frame force in the child frame.
     #[inline(always)]
     pub fn act_inv_force(&self, f: &Force) -> Force {
-        let rt = self.rotation.transpose();
         Force {
-            linear: rt * f.linear,
-            angular: rt * (f.angular - self.translation.cross(&f.linear)),
+            linear: self.rotation.tr_mul(&f.linear),
+            angular: self.rotation.tr_mul(&(f.angular - self.translation.cross(&f.linear))),
         }
     }
 }

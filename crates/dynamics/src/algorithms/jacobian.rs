@@ -2,12 +2,11 @@
 
 use nalgebra::{Matrix6xX, Vector3, Vector6};
 
-use crate::algorithms::kinematics::update_frame_placements;
 use crate::algorithms::{update_body_placements, update_joint_placements};
 use crate::data::Data;
 use crate::error::{check_len, DimensionError};
 use crate::model::{JointKind, Model};
-use crate::spatial::Motion;
+use crate::spatial::{Motion, Transform};
 
 /// The geometric Jacobian of frame `frame` (index into [`Model::frames`]) into
 /// `data.jacobian`: `6 x n`, linear rows first, base-frame axes, linear velocity of the
@@ -24,8 +23,7 @@ pub fn frame_jacobian<'d>(model: &Model, data: &'d mut Data, q: &[f64], frame: u
     }
     update_joint_placements(model, data, q);
     update_body_placements(data);
-    update_frame_placements(model, data);
-    let origin = data.frame_placements[frame].translation;
+    let origin = update_one_frame(model, data, frame).translation;
     let last = model.frames[frame].parent_joint;
     for j in 0..n {
         let mut col = data.jacobian.column_mut(j);
@@ -67,7 +65,7 @@ pub fn frame_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f6
     }
     update_joint_placements(model, data, q);
     update_body_placements(data);
-    update_frame_placements(model, data);
+    let p = update_one_frame(model, data, frame).translation;
     // Spatial (base-origin) quantities: v = sum S_j qd_j, a = sum (v_j x S_j) qd_j.
     let mut velocity = Motion::zero();
     let mut acceleration = Motion::zero();
@@ -78,7 +76,6 @@ pub fn frame_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f6
             acceleration = acceleration + velocity.cross_motion(&s).scaled(v[j]);
         }
     }
-    let p = data.frame_placements[frame].translation;
     let w = velocity.angular;
     let point_velocity: Vector3<f64> = velocity.linear + w.cross(&p);
     let linear = acceleration.linear + acceleration.angular.cross(&p) + w.cross(&point_velocity);
@@ -89,4 +86,16 @@ pub fn frame_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f6
 /// `Jdot qdot` of the tip frame (see [`frame_jdot_qdot`]).
 pub fn tip_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64]) -> Result<&'d Vector6<f64>, DimensionError> {
     frame_jdot_qdot(model, data, q, v, model.tip_frame)
+}
+
+/// Places one frame from `data.body_placements` (the Jacobians need only theirs).
+#[inline(always)]
+fn update_one_frame(model: &Model, data: &mut Data, frame: usize) -> Transform {
+    let f = &model.frames[frame];
+    let placement = match f.parent_joint {
+        Some(j) => data.body_placements[j].compose(&f.placement),
+        None => f.placement,
+    };
+    data.frame_placements[frame] = placement;
+    placement
 }

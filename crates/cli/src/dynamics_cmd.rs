@@ -1,0 +1,187 @@
+//! `admittance dynamics` and `admittance model`.
+
+use std::path::PathBuf;
+
+use admittance_dynamics::{
+    coriolis_matrix, crba, forward_kinematics, gravity_torque, rnea, tip_jacobian, Data, DynamicsError, JointKind, Model,
+};
+use clap::Args;
+use serde_json::json;
+
+use crate::CliError;
+
+#[derive(Args)]
+pub struct ChainArgs {
+    /// URDF file of the arm.
+    #[arg(long)]
+    urdf: PathBuf,
+    /// Base link (default: the URDF's root link).
+    #[arg(long)]
+    base: Option<String>,
+    /// Tip link (default: the single leaf link).
+    #[arg(long)]
+    tip: Option<String>,
+}
+
+#[derive(Args)]
+pub struct DynamicsArgs {
+    #[command(flatten)]
+    chain: ChainArgs,
+    /// Joint positions, comma-separated, chain order (continuous joints: the angle).
+    #[arg(long, allow_hyphen_values = true)]
+    q: String,
+    /// Joint velocities (default zeros).
+    #[arg(long, allow_hyphen_values = true)]
+    v: Option<String>,
+    /// Joint accelerations (default zeros).
+    #[arg(long, allow_hyphen_values = true)]
+    a: Option<String>,
+    /// Gravity in the base frame, GX,GY,GZ (default 0,0,-9.81).
+    #[arg(long, allow_hyphen_values = true)]
+    gravity: Option<String>,
+}
+
+#[derive(Args)]
+pub struct ModelArgs {
+    #[command(flatten)]
+    chain: ChainArgs,
+}
+
+fn load(chain: &ChainArgs) -> Result<Model, CliError> {
+    Model::from_urdf_file(&chain.urdf, chain.base.as_deref(), chain.tip.as_deref()).map_err(|e| match e {
+        DynamicsError::Io { .. } => CliError::usage(e.to_string()),
+        other => CliError::input(other.to_string()),
+    })
+}
+
+/// Parses `a,b,c` into exactly `expected` finite numbers.
+pub fn parse_list(flag: &str, text: &str, expected: usize, what: &str) -> Result<Vec<f64>, CliError> {
+    let mut values = Vec::new();
+    for (k, part) in text.split(',').enumerate() {
+        let part = part.trim();
+        match part.parse::<f64>() {
+            Ok(v) if v.is_finite() => values.push(v),
+            _ => {
+                return Err(CliError::usage(format!(
+                    "--{flag}: value {} ({part:?}) is not a finite number",
+                    k + 1
+                )))
+            }
+        }
+    }
+    if values.len() != expected {
+        return Err(CliError::usage(format!(
+            "--{flag} has {} values but needs {expected} ({what})",
+            values.len()
+        )));
+    }
+    Ok(values)
+}
+
+fn rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+}
+
+pub fn dynamics(args: &DynamicsArgs) -> Result<(), CliError> {
+    let mut model = load(&args.chain)?;
+    let n = model.nq();
+    let names: Vec<String> = model.joint_names().map(String::from).collect();
+    let what = format!("one per joint: {}", names.join(", "));
+    let q = parse_list("q", &args.q, n, &what)?;
+    let v = match &args.v {
+        Some(t) => parse_list("v", t, n, &what)?,
+        None => vec![0.0; n],
+    };
+    let a = match &args.a {
+        Some(t) => parse_list("a", t, n, &what)?,
+        None => vec![0.0; n],
+    };
+    if let Some(g) = &args.gravity {
+        let g = parse_list("gravity", g, 3, "GX,GY,GZ")?;
+        model.gravity = nalgebra::Vector3::new(g[0], g[1], g[2]);
+    }
+    let mut data = Data::new(&model);
+    // Lengths were checked above, so the algorithms cannot fail here.
+    let internal = |e: admittance_dynamics::DimensionError| CliError { code: 1, message: e.to_string() };
+    let tau = rnea(&model, &mut data, &q, &v, &a).map_err(internal)?.as_slice().to_vec();
+    let mass = rows(crba(&model, &mut data, &q).map_err(internal)?);
+    let gravity = gravity_torque(&model, &mut data, &q).map_err(internal)?.as_slice().to_vec();
+    let coriolis = rows(coriolis_matrix(&model, &mut data, &q, &v).map_err(internal)?);
+    let jac = tip_jacobian(&model, &mut data, &q).map_err(internal)?;
+    let jacobian: Vec<Vec<f64>> = (0..6).map(|r| jac.row(r).iter().copied().collect()).collect();
+    forward_kinematics(&model, &mut data, &q).map_err(internal)?;
+    let tip = data.tip_placement(&model);
+    let rotation: Vec<Vec<f64>> = (0..3).map(|r| tip.rotation.row(r).iter().copied().collect()).collect();
+    let out = json!({
+        "joints": names,
+        "tau": tau,
+        "mass_matrix": mass,
+        "gravity": gravity,
+        "coriolis": coriolis,
+        "position": tip.translation.as_slice(),
+        "rotation": rotation,
+        "jacobian": jacobian,
+    });
+    crate::write_stdout(&format!("{out}\n"));
+    Ok(())
+}
+
+fn limit(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.4}")
+    } else {
+        "-".into()
+    }
+}
+
+/// `writeln!` into a String (writing to a String cannot fail).
+macro_rules! outln {
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($out, $($arg)*);
+    }};
+}
+
+pub fn model(args: &ModelArgs) -> Result<(), CliError> {
+    let model = load(&args.chain)?;
+    let mut out = String::new();
+    outln!(out, "robot    {}", model.robot_name);
+    outln!(out, "source   {}", model.source);
+    outln!(out, "chain    {} -> {} ({} moving joints)", model.base_link, model.tip().name, model.nq());
+    out.push('\n');
+    outln!(out, "{:>2}  {:<18} {:<10} {:<24} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}", "#", "joint", "type", "axis", "lower", "upper", "velocity", "effort", "damping", "friction");
+    for (i, j) in model.joints.iter().enumerate() {
+        let axis = format!("({:.3}, {:.3}, {:.3})", j.axis.x, j.axis.y, j.axis.z);
+        let kind = match j.kind {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+        };
+        outln!(out, 
+            "{:>2}  {:<18} {:<10} {:<24} {:>9} {:>9} {:>9} {:>9} {:>8.4} {:>8.4}",
+            i,
+            j.name,
+            kind,
+            axis,
+            limit(j.limits.lower),
+            limit(j.limits.upper),
+            limit(j.limits.velocity),
+            limit(j.limits.effort),
+            j.damping,
+            j.friction
+        );
+    }
+    out.push('\n');
+    outln!(out, "{:<28} {:>10}  carried by", "link", "mass (kg)");
+    for lm in &model.link_masses {
+        let by = lm.joint.map_or("base (static)".to_string(), |j| format!("joint {}", model.joints[j].name));
+        outln!(out, "{:<28} {:>10.4}  {}", lm.link, lm.mass, by);
+    }
+    out.push('\n');
+    outln!(out, "total moving mass {:.4} kg", model.total_moving_mass());
+    if !model.excluded_links.is_empty() {
+        outln!(out, "not modelled (hang off the chain through other moving joints): {}", model.excluded_links.join(", "));
+    }
+    crate::write_stdout(&out);
+    Ok(())
+}

@@ -1,0 +1,77 @@
+//! The `admittance` command.
+//!
+//! Exit codes: 0 success; 1 a run failed; 2 bad command-line arguments; 3 a bad input
+//! file (URDF, scenario, data) — always with a one- or two-line message on stderr.
+
+mod dynamics_cmd;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Force-sensorless, learning-based admittance control of robot arms.
+#[derive(Parser)]
+#[command(name = "admittance", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Evaluate the rigid-body dynamics of a URDF chain at one state and print JSON.
+    Dynamics(dynamics_cmd::DynamicsArgs),
+    /// Print a readable summary of a URDF chain: joints, limits, masses.
+    Model(dynamics_cmd::ModelArgs),
+}
+
+/// A failure with its exit code and a short message.
+pub struct CliError {
+    pub code: u8,
+    pub message: String,
+}
+
+impl CliError {
+    pub fn usage(message: impl Into<String>) -> Self {
+        Self { code: 2, message: message.into() }
+    }
+    pub fn input(message: impl Into<String>) -> Self {
+        Self { code: 3, message: message.into() }
+    }
+}
+
+/// Writes to stdout; a closed pipe (`| head`) is not an error worth a panic.
+pub fn write_stdout(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            // One line: clap's first line, plus where to look for usage.
+            let rendered = e.render().to_string();
+            let first = rendered.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            eprintln!("admittance: {first} (see `admittance --help`)");
+            return ExitCode::from(2);
+        }
+    };
+    let result = match cli.command {
+        Command::Dynamics(args) => dynamics_cmd::dynamics(&args),
+        Command::Model(args) => dynamics_cmd::model(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("admittance: {}", e.message);
+            ExitCode::from(e.code)
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! The real-time contract: after `Model` and `Data` are built, no algorithm allocates.
+//! A counting global allocator wraps the system one for this test binary.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use admittance_dynamics::*;
+use nalgebra::Vector6;
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn no_algorithm_allocates_after_construction() {
+    let model = common::baxter();
+    let mut data = Data::new(&model);
+    let q = [0.1, -0.4, 0.3, 1.2, -0.2, 0.6, 0.1];
+    let v = [0.5, -0.3, 0.2, 0.4, -0.6, 0.1, 0.9];
+    let a = [1.0, 0.5, -0.5, 0.2, 0.3, -0.1, 0.7];
+    let w = Vector6::new(1.0, 2.0, 3.0, 0.1, 0.2, 0.3);
+    let short = [0.0; 3];
+    let mut run = |data: &mut Data| {
+        rnea(&model, data, &q, &v, &a).unwrap();
+        rnea_with_tip_wrench(&model, data, &q, &v, &a, &w).unwrap();
+        crba(&model, data, &q).unwrap();
+        coriolis_matrix(&model, data, &q, &v).unwrap();
+        gravity_torque(&model, data, &q).unwrap();
+        nonlinear_effects(&model, data, &q, &v).unwrap();
+        aba(&model, data, &q, &v, &a).unwrap();
+        aba_with_tip_wrench(&model, data, &q, &v, &a, &w).unwrap();
+        forward_kinematics(&model, data, &q).unwrap();
+        tip_jacobian(&model, data, &q).unwrap();
+        frame_jacobian(&model, data, &q, 3).unwrap();
+        tip_jdot_qdot(&model, data, &q, &v).unwrap();
+        kinetic_energy(&model, data, &q, &v).unwrap();
+        potential_energy(&model, data, &q).unwrap();
+        // Errors are reported without allocating too.
+        assert!(rnea(&model, data, &short, &v, &a).is_err());
+        assert!(frame_jacobian(&model, data, &q, 999).is_err());
+    };
+    run(&mut data); // warm-up
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    for _ in 0..100 {
+        run(&mut data);
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert_eq!(after - before, 0, "{} allocations in 100 rounds of every algorithm", after - before);
+}
