@@ -319,17 +319,32 @@ impl Inertia {
     #[inline(always)]
     pub fn transformed(&self, x: &Transform) -> Inertia {
         let r = &x.rotation;
-        let p = skew(&x.translation);
+        let p = &x.translation;
         let rh = r * self.first_moment;
-        let rh_skew = skew(&rh);
-        let rot = r * self.rotational * r.transpose();
-        let shift = rh_skew * p;
-        // I_o' = R I_o R^T - ([Rh]x [p]x + [p]x [Rh]x) - m [p]x [p]x
-        Inertia {
-            mass: self.mass,
-            first_moment: rh + x.translation * self.mass,
-            rotational: rot - shift - shift.transpose() - p * p * self.mass,
+        // R I_o R^T, using the symmetry of the result.
+        let ri = r * self.rotational;
+        let mut rot = Matrix3::zeros();
+        for i in 0..3 {
+            for j in i..3 {
+                let v = ri[(i, 0)] * r[(j, 0)] + ri[(i, 1)] * r[(j, 1)] + ri[(i, 2)] * r[(j, 2)];
+                rot[(i, j)] = v;
+                rot[(j, i)] = v;
+            }
         }
+        // I_o' = R I_o R^T - ([Rh]x [p]x + [p]x [Rh]x) - m [p]x [p]x, with
+        // [a]x [b]x = b a^T - (a.b) 1:
+        //   [Rh]x[p]x + [p]x[Rh]x = p Rh^T + Rh p^T - 2 (p.Rh) 1,   [p]x[p]x = p p^T - |p|^2 1.
+        let m = self.mass;
+        let diag = 2.0 * p.dot(&rh) + m * p.norm_squared();
+        for i in 0..3 {
+            for j in i..3 {
+                let v = rot[(i, j)] - (p[i] * rh[j] + rh[i] * p[j]) - m * p[i] * p[j];
+                rot[(i, j)] = v;
+                rot[(j, i)] = v;
+            }
+            rot[(i, i)] += diag;
+        }
+        Inertia { mass: m, first_moment: rh + p * m, rotational: rot }
     }
 
     /// Sum of two inertias expressed in the same frame.
