@@ -4,6 +4,7 @@
 //! file (URDF, scenario, data) — always with a one- or two-line message on stderr.
 
 mod dynamics_cmd;
+mod run_cmd;
 
 use std::process::ExitCode;
 
@@ -23,6 +24,8 @@ enum Command {
     Dynamics(dynamics_cmd::DynamicsArgs),
     /// Print a readable summary of a URDF chain: joints, limits, masses.
     Model(dynamics_cmd::ModelArgs),
+    /// Run a scenario (every variant) and write its run folder: summary.json, CSVs, report.
+    Run(run_cmd::RunArgs),
 }
 
 /// A failure with its exit code and a short message.
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Dynamics(args) => dynamics_cmd::dynamics(&args),
         Command::Model(args) => dynamics_cmd::model(&args),
+        Command::Run(args) => run_cmd::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,7 +1,8 @@
 //! Per-call timing of each algorithm, printed as `<algorithm> <median ns>` lines, for the
 //! side-by-side comparison with Pinocchio (scripts/bench/compare_pinocchio.sh), which
-//! times its C++ library the same way: 1000 random states, batches over all of them,
-//! median over batches.
+//! times its C++ library the same way: 1000 random states, 1000 batches of 100 calls
+//! cycling through them, median over batches (short batches keep scheduler pauses on a
+//! busy machine out of most samples).
 //!
 //! Usage: cargo run --release -p admittance-dynamics --example timing -- URDF TIP
 
@@ -12,7 +13,8 @@ use admittance_dynamics::*;
 use rand::{Rng, SeedableRng};
 
 const STATES: usize = 1000;
-const DEFAULT_BATCHES: usize = 200;
+const DEFAULT_BATCHES: usize = 1000;
+const PER_BATCH: usize = 100;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -35,17 +37,19 @@ fn main() {
     };
     let (qs, vs, as_) = (draw(1.5), draw(2.0), draw(5.0));
 
-    let mut time = |name: &str, f: &mut dyn FnMut(usize)| {
+    let time = |name: &str, f: &mut dyn FnMut(usize)| {
         for k in 0..STATES {
             f(k);
         }
         let mut per_call = Vec::with_capacity(batches);
+        let mut first = 0;
         for _ in 0..batches {
             let start = Instant::now();
-            for k in 0..STATES {
-                f(k);
+            for k in first..first + PER_BATCH {
+                f(k % STATES);
             }
-            per_call.push(start.elapsed().as_nanos() as f64 / STATES as f64);
+            per_call.push(start.elapsed().as_nanos() as f64 / PER_BATCH as f64);
+            first = (first + PER_BATCH) % STATES;
         }
         per_call.sort_by(|a, b| a.total_cmp(b));
         println!("{name} {:.1}", per_call[batches / 2]);

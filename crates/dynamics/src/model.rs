@@ -86,6 +86,15 @@ impl Joint {
         }
     }
 
+    /// `S^T f`: the component of a wrench (in this joint's frame) along the joint.
+    #[inline(always)]
+    pub fn subspace_dot(&self, f: &crate::spatial::Force) -> f64 {
+        match self.kind {
+            JointKind::Prismatic => self.axis.dot(&f.linear),
+            _ => self.axis.dot(&f.angular),
+        }
+    }
+
     /// Placement of the joint frame at coordinate `q` in the parent body's frame.
     #[inline(always)]
     pub fn transform(&self, q: f64) -> Transform {

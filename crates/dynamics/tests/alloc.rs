@@ -39,7 +39,7 @@ fn no_algorithm_allocates_after_construction() {
     let a = [1.0, 0.5, -0.5, 0.2, 0.3, -0.1, 0.7];
     let w = Vector6::new(1.0, 2.0, 3.0, 0.1, 0.2, 0.3);
     let short = [0.0; 3];
-    let mut run = |data: &mut Data| {
+    let run = |data: &mut Data| {
         rnea(&model, data, &q, &v, &a).unwrap();
         rnea_with_tip_wrench(&model, data, &q, &v, &a, &w).unwrap();
         crba(&model, data, &q).unwrap();

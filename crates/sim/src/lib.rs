@@ -1,1 +1,48 @@
-//! placeholder: filled by its issue
+//! Simulation layer of `admittance`: the plant that stands in for the robot
+//! (METHOD.md section 1) and what the controller can measure of it.
+//!
+//! * [`plant`]: the true arm: rigid-body dynamics of a (possibly perturbed) model,
+//!   friction, actuator deadzone and effort limits, the counterbalance spring; fixed-step
+//!   integration at the plant rate with zero-order hold of the command.
+//! * [`environment`]: joint-space spring-damper-mass, Cartesian wall, scripted torques and
+//!   forces, each in a time window.
+//! * [`integrator`]: semi-implicit Euler (MuJoCo's scheme) and the default RK4 split,
+//!   both with implicit friction.
+//! * [`sensors`]: encoder quantisation and noise, filtered differentiation, fault
+//!   injection.
+//!
+//! ```
+//! use admittance_dynamics::Model;
+//! use admittance_sim::{Plant, PlantConfig, Sensors};
+//! let model = Model::from_urdf_file("../../models/baxter_left_arm.urdf".as_ref(), Some("base"), Some("left_hand")).unwrap();
+//! let mut config = PlantConfig::default();
+//! config.spring.enabled = true;
+//! let mut plant = Plant::new(&model, &config).unwrap();
+//! let mut sensors = Sensors::new(&model, &config.sensors, config.control_rate_hz).unwrap();
+//! let tau = [0.0; 7];
+//! for _ in 0..10 {
+//!     plant.step_control(&tau).unwrap();
+//!     let m = sensors.sample(plant.time(), plant.q(), &tau).unwrap();
+//!     assert!(m.q.iter().all(|q| q.is_finite()));
+//! }
+//! ```
+
+pub mod environment;
+pub mod integrator;
+pub mod plant;
+pub mod scenario;
+pub mod sensors;
+
+pub use environment::{
+    Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
+    TipForceProfileConfig, WallConfig,
+};
+pub use integrator::Integrator;
+pub use plant::actuator::{clamp_effort, Deadzone};
+pub use plant::config::{
+    DeadzoneConfig, FrictionConfig, PayloadConfig, PlantConfig, Solver, SpringConfig, SpringModel,
+};
+pub use plant::error::SimError;
+pub use plant::friction::Friction;
+pub use plant::{Plant, PlantCounters, StepRecord};
+pub use sensors::{FaultConfig, FaultKind, LowPass, Measurement, SensorConfig, Sensors};

@@ -13,17 +13,18 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Result<&'d DMat
     check_len("q", q, n)?;
     update_joint_placements(model, data, q);
     data.composite.copy_from_slice(&model.bodies);
+    let m = data.mass_matrix.as_mut_slice();
     for i in (0..n).rev() {
         // Column i: the wrench needed to accelerate the composite body i..n at unit qddot_i,
         // carried back through the ancestors.
-        let si = model.joints[i].motion_subspace();
-        let mut f = data.composite[i].mul_motion(&si);
-        data.mass_matrix[(i, i)] = f.dot(&si);
+        let joint = &model.joints[i];
+        let mut f = data.composite[i].mul_motion(&joint.motion_subspace());
+        m[i * n + i] = joint.subspace_dot(&f);
         for j in (0..i).rev() {
             f = data.joint_placements[j + 1].act_force(&f);
-            let value = f.dot(&model.joints[j].motion_subspace());
-            data.mass_matrix[(j, i)] = value;
-            data.mass_matrix[(i, j)] = value;
+            let value = model.joints[j].subspace_dot(&f);
+            m[i * n + j] = value;
+            m[j * n + i] = value;
         }
         if i > 0 {
             let moved = data.composite[i].transformed(&data.joint_placements[i]);

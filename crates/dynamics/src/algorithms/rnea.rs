@@ -40,9 +40,25 @@ pub fn rnea_with_tip_wrench<'d>(
 
 /// Generalised gravity `G(q)`, into `data.gravity_torque`.
 pub fn gravity_torque<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Result<&'d DVector<f64>, DimensionError> {
-    check_len("q", q, model.nq())?;
-    rnea_pass(model, data, q, None, None, None);
-    data.gravity_torque.copy_from(&data.tau);
+    let n = model.nq();
+    check_len("q", q, n)?;
+    update_joint_placements(model, data, q);
+    // With v = 0 and a = 0 every body acceleration is the (linear) gravity acceleration
+    // seen in the body frame, and each body wrench is its weight.
+    let mut a = -model.gravity;
+    for i in 0..n {
+        a = data.joint_placements[i].rotation.tr_mul(&a);
+        let inertia = &model.bodies[i];
+        data.forces[i] = Force { linear: a * inertia.mass, angular: inertia.first_moment.cross(&a) };
+    }
+    for i in (0..n).rev() {
+        let f = data.forces[i];
+        data.gravity_torque[i] = model.joints[i].subspace_dot(&f);
+        if i > 0 {
+            let moved = data.joint_placements[i].act_force(&f);
+            data.forces[i - 1] += moved;
+        }
+    }
     Ok(&data.gravity_torque)
 }
 
@@ -100,8 +116,7 @@ fn rnea_pass(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>, a: Op
         }
     }
     for i in (0..n).rev() {
-        let s = model.joints[i].motion_subspace();
-        data.tau[i] = data.forces[i].dot(&s);
+        data.tau[i] = model.joints[i].subspace_dot(&data.forces[i]);
         if i > 0 {
             let f = data.joint_placements[i].act_force(&data.forces[i]);
             data.forces[i - 1] += f;

@@ -1,0 +1,165 @@
+//! Configuration errors and run-time faults.
+
+use std::fmt;
+
+/// A configuration value that cannot be used, named by its key.
+///
+/// `key` is the dotted path of the offending field inside the configuration struct
+/// (`"saturation.rho"`, `"k1[3]"`, `"f_network.width"`), so that a scenario loader can map
+/// it to a file and line; `message` says what is wrong and how to fix it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("`{key}`: {message}")]
+pub struct ConfigError {
+    /// Dotted path of the offending field.
+    pub key: String,
+    /// What is wrong, with a hint.
+    pub message: String,
+}
+
+impl ConfigError {
+    /// An error for `key`.
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        ConfigError {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same error with `prefix.` put in front of the key.
+    pub fn within(mut self, prefix: &str) -> Self {
+        if !prefix.is_empty() {
+            self.key = if self.key.is_empty() || self.key.starts_with('[') {
+                format!("{prefix}{}", self.key)
+            } else {
+                format!("{prefix}.{}", self.key)
+            };
+        }
+        self
+    }
+}
+
+/// Why a step did not run its normal law (see [`crate::SafeHold`] for what is written
+/// instead).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// An argument has the wrong length (`argument` names it: `"q"`, `"torque"`, ...).
+    WrongLength {
+        /// The argument.
+        argument: &'static str,
+        /// The controller's joint count.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// A measured value (`q` or `qdot`) is NaN or infinite.
+    NonFiniteMeasurement {
+        /// `"q"` or `"qdot"`.
+        argument: &'static str,
+        /// First offending joint.
+        joint: usize,
+    },
+    /// The position vector has been bit-identical for `steps` consecutive steps while motion
+    /// was expected (see [`crate::SafeHoldConfig::stale_steps`]).
+    StaleMeasurement {
+        /// Consecutive identical samples seen.
+        steps: u32,
+    },
+    /// A reference (`q_ref`, `qdot_ref`, `qddot_ref`, or the desired trajectory of the
+    /// admittance model) is NaN or infinite.
+    NonFiniteReference {
+        /// The argument.
+        argument: &'static str,
+        /// First offending joint.
+        joint: usize,
+    },
+    /// The external-torque estimate is NaN or infinite.
+    NonFiniteEstimate {
+        /// First offending joint.
+        joint: usize,
+    },
+    /// `dt` is not finite and positive.
+    InvalidTimeStep,
+    /// The control law itself produced a non-finite torque (e.g. diverged weights); the
+    /// safe hold was written instead.
+    NonFiniteOutput {
+        /// First offending joint.
+        joint: usize,
+    },
+    /// A dynamics or network call failed unexpectedly (should not happen after the checks
+    /// above; reported rather than panicking).
+    Internal(&'static str),
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Fault::WrongLength {
+                argument,
+                expected,
+                found,
+            } => {
+                write!(
+                    f,
+                    "`{argument}` has {found} values, the controller has {expected} joints"
+                )
+            }
+            Fault::NonFiniteMeasurement { argument, joint } => {
+                write!(f, "measured `{argument}` is not finite at joint {joint}")
+            }
+            Fault::StaleMeasurement { steps } => {
+                write!(
+                    f,
+                    "measured `q` unchanged for {steps} steps while motion is expected"
+                )
+            }
+            Fault::NonFiniteReference { argument, joint } => {
+                write!(f, "reference `{argument}` is not finite at joint {joint}")
+            }
+            Fault::NonFiniteEstimate { joint } => {
+                write!(f, "external torque estimate is not finite at joint {joint}")
+            }
+            Fault::InvalidTimeStep => write!(f, "time step is not finite and positive"),
+            Fault::NonFiniteOutput { joint } => {
+                write!(
+                    f,
+                    "the control law produced a non-finite torque at joint {joint}"
+                )
+            }
+            Fault::Internal(what) => write!(f, "internal error: {what}"),
+        }
+    }
+}
+
+/// Outcome of one controller, admittance or observer step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[must_use]
+pub enum StepStatus {
+    /// The normal law ran; the output is its (clamped) result.
+    Ok,
+    /// A fault was detected; the documented safe output was written instead.
+    Fault(Fault),
+}
+
+impl StepStatus {
+    /// Whether the step ran normally.
+    pub fn is_ok(&self) -> bool {
+        matches!(self, StepStatus::Ok)
+    }
+
+    /// The fault, if any.
+    pub fn fault(&self) -> Option<Fault> {
+        match self {
+            StepStatus::Ok => None,
+            StepStatus::Fault(f) => Some(*f),
+        }
+    }
+}
+
+impl From<Result<(), Fault>> for StepStatus {
+    fn from(r: Result<(), Fault>) -> Self {
+        match r {
+            Ok(()) => StepStatus::Ok,
+            Err(f) => StepStatus::Fault(f),
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! Flat ("broad") RBF network of the force-sensorless observer (METHOD.md section 5,
+//! paper eq. 14-19).
+//!
+//! The network learns the free-motion torque `tau_free(q, q', q'')` from free-motion data
+//! (METHOD.md section 5); in contact, `tau_ext_hat = f_hat(q, q', q'') - tau` (eq. 19).
+//! It is generic over the input width d_in (21 for X = [q, q', q''] of a 7-joint arm) and
+//! the output width d_out (7).
+//!
+//! * Pattern row `a(x) = [X_std | friction features | 1 | xi(X)]`, width
+//!   P = d_in + F + 1 + L: standardised inputs ([`Standardiser`]), optional
+//!   `tanh(q'/v_k)` columns ([`FrictionFeatures`], METHOD.md section 7), a bias, and L
+//!   Gaussian enhancement nodes `xi_j(X) = exp(-||X - u_j||^2 / eta_j^2)` ([`NodeSet`]).
+//! * Centres by k-means++ seeding on a random subsample, widths by a k-nearest-centre
+//!   heuristic ([`WidthRule`]); see the `centres` notes on [`BroadConfig`].
+//! * Ridge solution `W = (A^T A + lambda D)^-1 A^T Y` with the bias not regularised (D is
+//!   the identity except a 0 for the bias column), from the Gram matrix accumulated in row
+//!   blocks (the N x P pattern matrix is never held), Cholesky solve, lambda chosen on a
+//!   validation set from a grid without recomputing the Gram ([`fit`]).
+//! * Incremental growth by k nodes ([`BroadModel::grow`]): only the new Gram rows are
+//!   computed, the Cholesky factor is extended by a Schur-complement block. The paper's
+//!   Greville pseudo-inverse form is [`greville_add_columns`] (small problems).
+//! * Allocation-free one-sample prediction ([`BroadModel::predict_into`]).
+//! * Versioned, checksummed, atomically written model files ([`BroadModel::save`],
+//!   [`BroadModel::load`]).
+//!
+//! # Design decisions
+//!
+//! * **Centres**: k-means++ seeding (D^2 sampling) on a uniform random subsample of
+//!   `centre_subsample` standardised training rows (default 20,000), ChaCha8 seeded by
+//!   `seed`, deterministic, no Lloyd iterations: the seeding spreads the centres over the
+//!   whole visited region (corners of the joint box included) while following the data
+//!   density; the subsample keeps it at tens of milliseconds (see `centres.rs`).
+//! * **Widths**: `eta_j = scale * mean distance from u_j to its k nearest other centres`
+//!   (default k = 8, scale = 2), in standardised units: local density adaptive, so that
+//!   neighbouring Gaussians overlap about equally everywhere. Scale 2 was the best of
+//!   {0.5, 1, 2, 3, 4} on a 3-input test function and on the 21-input synthetic arm data
+//!   of `examples/broad_train_timing.rs` (validation NRMSE 0.30 with scale 2 or 4 against
+//!   0.34 with scale 1 at N = 450,000, L = 1000).
+//! * **Bias**: not regularised (D has a 0 at the bias column): the intercept carries the
+//!   mean torque, which has no reason to be small. The paper's `(lambda I + A^T A)^-1`
+//!   regularises everything; with an unregularised bias the training residuals have
+//!   exactly zero mean. The system stays positive definite for lambda > 0.
+//! * **Lambda**: a grid of relative values (`lambda = lambda_rel * N`, default
+//!   1e-10 .. 1e-2); one Gram accumulation, one Cholesky solve per candidate, one blocked
+//!   pass over the validation set predicting with all candidates at once; the candidate
+//!   with the smallest mean (over outputs) validation NRMSE wins.
+//! * **Gram**: row blocks of `block_rows` (default 2048) rows; each worker thread forms the
+//!   block's pattern (the Gaussian distances by one GEMM, `||x||^2 + ||u||^2 - 2 X U^T`,
+//!   then a vectorised exp accurate to 1 ulp) and adds it to a private Gram by a symmetric
+//!   rank-k update of the lower triangle (faer's triangular matmul); the private Grams are
+//!   summed ([`GramStrategy::PerThread`], default; [`GramStrategy::SharedGemm`] instead
+//!   parallelises inside one GEMM). Memory: one P x P Gram and one P x block pattern per
+//!   thread.
+
+mod centres;
+mod config;
+mod data;
+mod error;
+mod features;
+mod gram;
+mod greville;
+mod io;
+mod kernels;
+mod model;
+mod solve;
+
+pub use config::{BroadConfig, FrictionFeatures, GramStrategy, WidthRule};
+pub use data::{Dataset, Standardiser};
+pub use error::BroadError;
+pub use features::NodeSet;
+pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
+pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
+pub use kernels::exp_nonpositive_slice;
+pub use model::{
+    fit, fit_with_nodes, BroadModel, FitReport, GrowthReport, GrowthSpec, LambdaScore, PhaseTimes, Workspace,
+};

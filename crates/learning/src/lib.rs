@@ -1,0 +1,10 @@
+//! Learning layer of `admittance`: radial-basis-function networks.
+//!
+//! * [`rbf`]: the Gaussian RBF layer of the adaptive controller (METHOD.md sections 3-4):
+//!   preallocated capacity, sigma-modified weight adaptation, node relevance tracking,
+//!   discard and grow at run time without allocation.
+//! * [`broad`]: the flat ("broad") RBF network of the force-sensorless observer
+//!   (METHOD.md section 5): ridge regression on free-motion data, incremental growth.
+
+pub mod broad;
+pub mod rbf;

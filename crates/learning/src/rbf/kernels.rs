@@ -1,0 +1,700 @@
+//! Numeric kernels of the layer: squared distances, a vectorisable `exp`, output
+//! accumulation and the weight update. No allocation, no panics (all slice lengths are
+//! guaranteed by the layer's invariants and re-checked by slicing that cannot fail).
+//!
+//! Layouts: the distance kernel reads a **dimension-major** copy of the centres
+//! (`centres_t[k * stride + i]` is coordinate `k` of node `i`, `stride` a multiple of
+//! [`BLOCK`]) so that `BLOCK` nodes are processed side by side in vector registers; weights
+//! are node-major rows of `n` values.
+//!
+//! Every kernel has one generic body (`*_impl::<FMA>`) compiled twice: for the baseline
+//! target, and (on x86-64) inside a `#[target_feature(enable = "avx2,fma")]` wrapper selected
+//! at run time when the CPU has both features ([`Isa::detect`]). The two builds compute the
+//! same formulas; the FMA build rounds `a * b + c` once instead of twice.
+
+/// Nodes processed side by side by the distance kernel: 32 with AVX2 (eight 4-wide
+/// accumulators, enough independent FMA chains to hide their latency), 16 for the baseline
+/// build (eight 2-wide registers). The dimension-major centre stride is a multiple of the
+/// larger, [`BLOCK`].
+pub(crate) const BLOCK: usize = 32;
+const BLOCK_GENERIC: usize = 16;
+#[cfg(target_arch = "x86_64")]
+const BLOCK_AVX2: usize = 32;
+
+/// `capacity` rounded up to a multiple of [`BLOCK`].
+pub(crate) fn padded(capacity: usize) -> usize {
+    capacity.div_ceil(BLOCK) * BLOCK
+}
+
+/// Instruction set used by the kernels, detected once at layer construction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Isa {
+    /// Baseline target features (SSE2 on x86-64).
+    Generic,
+    /// AVX2 and FMA, verified present at run time.
+    #[cfg(target_arch = "x86_64")]
+    Avx2Fma,
+}
+
+impl Isa {
+    /// The best instruction set available on this CPU.
+    pub(crate) fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                return Isa::Avx2Fma;
+            }
+        }
+        Isa::Generic
+    }
+}
+
+/// Largest exponent magnitude evaluated: `exp(-708)` is about `3.3e-308`, the bottom of the
+/// normal range; anything further away is flushed to zero.
+pub(crate) const MAX_EXPONENT: f64 = 708.0;
+
+#[inline(always)]
+fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
+    if FMA {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
+/// Squared Euclidean distance `||a - b||^2` over the common length (off the hot path).
+#[inline]
+pub(crate) fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let ca = a.chunks_exact(4);
+    let cb = b.chunks_exact(4);
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            let t = x[k] - y[k];
+            acc[k] += t * t;
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ra.iter().zip(rb) {
+        let t = x - y;
+        tail += t * t;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+const EXP_LOG2E: f64 = std::f64::consts::LOG2_E;
+// fdlibm's split of ln 2 (ln2_hi has 32 trailing zero bits, so k * EXP_LN2_HI is exact for
+// |k| < 2^11): 6.93147180369123816490e-01 and 1.90821492927058770002e-10.
+const EXP_LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+const EXP_LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
+// 1.5 * 2^52: adding it rounds to an integer held in the low mantissa bits.
+const EXP_SHIFTER: f64 = 6_755_399_441_055_744.0;
+/// Taylor coefficients 1/k!, k = 0..=13.
+const EXP_C: [f64; 14] = [
+    1.0,
+    1.0,
+    1.0 / 2.0,
+    1.0 / 6.0,
+    1.0 / 24.0,
+    1.0 / 120.0,
+    1.0 / 720.0,
+    1.0 / 5040.0,
+    1.0 / 40320.0,
+    1.0 / 362_880.0,
+    1.0 / 3_628_800.0,
+    1.0 / 39_916_800.0,
+    1.0 / 479_001_600.0,
+    1.0 / 6_227_020_800.0,
+];
+
+/// `x` clamped to `[0, MAX_EXPONENT]`, with a NaN mapped to 0 (`f64::clamp` would keep the
+/// NaN); compiles to one `max` and one `min`.
+#[inline(always)]
+#[allow(clippy::manual_clamp)]
+fn clamp_exponent(x: f64) -> f64 {
+    x.max(0.0).min(MAX_EXPONENT)
+}
+
+/// `exp(-x)` for `x` in `[0, MAX_EXPONENT]` (other `x` are clamped into it), branch-free so
+/// that loops over it vectorise. Cody-Waite reduction `-x = k ln2 + r`, `|r| <= ln2 / 2`, a
+/// degree-13 Taylor polynomial for `exp(r)` (truncation below `5e-18` relative) evaluated by
+/// Estrin's scheme (dependency depth 5), and the scale `2^k` built in the exponent bits. Relative error within a few ulp of `f64::exp`.
+#[inline(always)]
+fn exp_neg_impl<const FMA: bool>(x: f64) -> f64 {
+    let y = -clamp_exponent(x);
+    let t = fmadd::<FMA>(y, EXP_LOG2E, EXP_SHIFTER);
+    let k = t - EXP_SHIFTER;
+    let r = fmadd::<FMA>(-k, EXP_LN2_LO, fmadd::<FMA>(-k, EXP_LN2_HI, y));
+    let p = exp_poly_estrin::<FMA>(r);
+    // 2^k: the integer k sits in the low bits of t; k + 1023 is in [1, 1023] here.
+    let bias = 1023u64.wrapping_sub(EXP_SHIFTER.to_bits());
+    let scale = f64::from_bits(t.to_bits().wrapping_add(bias) << 52);
+    p * scale
+}
+
+/// `sum_k EXP_C[k] r^k`, k = 0..=13, by Estrin's scheme.
+#[inline(always)]
+fn exp_poly_estrin<const FMA: bool>(r: f64) -> f64 {
+    let c = &EXP_C;
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let r8 = r4 * r4;
+    let p01 = fmadd::<FMA>(c[1], r, c[0]);
+    let p23 = fmadd::<FMA>(c[3], r, c[2]);
+    let p45 = fmadd::<FMA>(c[5], r, c[4]);
+    let p67 = fmadd::<FMA>(c[7], r, c[6]);
+    let p89 = fmadd::<FMA>(c[9], r, c[8]);
+    let p1011 = fmadd::<FMA>(c[11], r, c[10]);
+    let p1213 = fmadd::<FMA>(c[13], r, c[12]);
+    let q0 = fmadd::<FMA>(p23, r2, p01);
+    let q1 = fmadd::<FMA>(p67, r2, p45);
+    let q2 = fmadd::<FMA>(p1011, r2, p89);
+    let t0 = fmadd::<FMA>(q1, r4, q0);
+    let t1 = fmadd::<FMA>(p1213, r4, q2);
+    fmadd::<FMA>(t1, r8, t0)
+}
+
+/// Gaussian of a scaled squared distance: `exp(-x)` for `x <= cutoff`, else `0`
+/// (eq. 9 with the activation cut-off).
+#[inline(always)]
+fn gaussian_impl<const FMA: bool>(x: f64, cutoff: f64) -> f64 {
+    let s = exp_neg_impl::<FMA>(x);
+    if x <= cutoff {
+        s
+    } else {
+        0.0
+    }
+}
+
+/// Baseline build of the cut-off Gaussian, used off the hot path.
+#[inline]
+pub(crate) fn gaussian(x: f64, cutoff: f64) -> f64 {
+    gaussian_impl::<false>(x, cutoff)
+}
+
+/// Lanes of the batched Gaussian: four 4-wide vectors with AVX2, so that four independent
+/// polynomial chains hide the FMA latency.
+pub(crate) const EXP_CHUNK: usize = 16;
+
+/// `act_j = exp(-x_j)` if `x_j <= cutoff` else `0`, with `x_j = dist_sq_j * inv_width_sq_j`,
+/// for one chunk of [`EXP_CHUNK`] lanes; [`exp_neg_impl`] written lane-wise (the same
+/// operations, so the same results) so that each step is one vector instruction per four
+/// lanes. A chunk whose lanes are all beyond the cut-off
+/// is written as zeros without evaluating the polynomial.
+#[inline(always)]
+fn gaussian_chunk<const FMA: bool>(
+    dist_sq: &[f64],
+    inv_width_sq: &[f64],
+    cutoff: f64,
+    act: &mut [f64],
+) {
+    const L: usize = EXP_CHUNK;
+    let (Some(d), Some(iw), Some(a)) = (dist_sq.get(..L), inv_width_sq.get(..L), act.get_mut(..L))
+    else {
+        return;
+    };
+    let mut x = [0.0f64; L];
+    let mut any = false;
+    for j in 0..L {
+        x[j] = d[j] * iw[j];
+        any |= x[j] <= cutoff;
+    }
+    if !any {
+        a.fill(0.0);
+        return;
+    }
+    let mut t = [0.0f64; L];
+    let mut r = [0.0f64; L];
+    for j in 0..L {
+        let y = -clamp_exponent(x[j]);
+        t[j] = fmadd::<FMA>(y, EXP_LOG2E, EXP_SHIFTER);
+        let k = t[j] - EXP_SHIFTER;
+        r[j] = fmadd::<FMA>(-k, EXP_LN2_LO, fmadd::<FMA>(-k, EXP_LN2_HI, y));
+    }
+    // Estrin's scheme: depth 5 instead of 13 dependent FMAs.
+    let mut p = [0.0f64; L];
+    for j in 0..L {
+        p[j] = exp_poly_estrin::<FMA>(r[j]);
+    }
+    let bias = 1023u64.wrapping_sub(EXP_SHIFTER.to_bits());
+    for j in 0..L {
+        let scale = f64::from_bits(t[j].to_bits().wrapping_add(bias) << 52);
+        let s = p[j] * scale;
+        a[j] = if x[j] <= cutoff { s } else { 0.0 };
+    }
+}
+
+/// [`gaussian_chunk`] over `act.len()` lanes (a multiple of [`EXP_CHUNK`]; a shorter tail
+/// is computed lane by lane).
+#[inline(always)]
+fn gaussians_impl<const FMA: bool>(
+    dist_sq: &[f64],
+    inv_width_sq: &[f64],
+    cutoff: f64,
+    act: &mut [f64],
+) {
+    let full = act.len() / EXP_CHUNK * EXP_CHUNK;
+    for (c, a) in act.chunks_exact_mut(EXP_CHUNK).enumerate() {
+        let lo = c * EXP_CHUNK;
+        if let (Some(d), Some(iw)) = (dist_sq.get(lo..), inv_width_sq.get(lo..)) {
+            gaussian_chunk::<FMA>(d, iw, cutoff, a);
+        }
+    }
+    let tail = act
+        .iter_mut()
+        .zip(dist_sq.iter().zip(inv_width_sq))
+        .skip(full);
+    for (a, (&d, &iw)) in tail {
+        *a = gaussian_impl::<FMA>(d * iw, cutoff);
+    }
+}
+
+/// Squared distances from `z` to the `B` nodes `start..start + B` of the dimension-major
+/// centres.
+#[inline(always)]
+fn block_sq_dist<const FMA: bool, const B: usize>(
+    z: &[f64],
+    centres_t: &[f64],
+    stride: usize,
+    start: usize,
+) -> [f64; B] {
+    let mut acc = [0.0f64; B];
+    let mut base = start;
+    for &zk in z {
+        if let Some(block) = centres_t.get(base..base + B) {
+            for j in 0..B {
+                let t = zk - block[j];
+                acc[j] = fmadd::<FMA>(t, t, acc[j]);
+            }
+        }
+        base += stride;
+    }
+    acc
+}
+
+// ----------------------------------------------------------------------------------------
+// Kernels with run-time dispatch
+// ----------------------------------------------------------------------------------------
+
+/// Centres and widths of the active nodes as the kernels read them.
+#[derive(Clone, Copy)]
+pub(crate) struct Nodes<'a> {
+    /// Dimension-major centres, `d * stride` values.
+    pub centres_t: &'a [f64],
+    /// Stride of `centres_t` (multiple of `BLOCK`, at least `len`).
+    pub stride: usize,
+    /// Active node count.
+    pub len: usize,
+    /// `1 / eta_i^2`, at least `len` values.
+    pub inv_width_sq: &'a [f64],
+    /// Scaled squared distance above which the activation is zero.
+    pub cutoff: f64,
+}
+
+macro_rules! dispatch {
+    ($isa:expr, $generic:expr, $avx2:expr) => {
+        match $isa {
+            // SAFETY: `Isa::Avx2Fma` is only constructed by `Isa::detect`, after checking at
+            // run time that the CPU supports AVX2 and FMA.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2Fma => unsafe { $avx2 },
+            Isa::Generic => $generic,
+        }
+    };
+}
+
+#[inline(always)]
+fn sq_dists_impl<const FMA: bool, const B: usize>(
+    z: &[f64],
+    nodes: Nodes<'_>,
+    dist_sq: &mut [f64],
+) {
+    let blocks = nodes.len.div_ceil(B);
+    for (b, out) in dist_sq.chunks_exact_mut(B).take(blocks).enumerate() {
+        out.copy_from_slice(&block_sq_dist::<FMA, B>(
+            z,
+            nodes.centres_t,
+            nodes.stride,
+            b * B,
+        ));
+    }
+}
+
+#[inline(always)]
+fn activate_impl<const FMA: bool, const B: usize>(
+    z: &[f64],
+    nodes: Nodes<'_>,
+    dist_sq: &mut [f64],
+    act: &mut [f64],
+) {
+    sq_dists_impl::<FMA, B>(z, nodes, dist_sq);
+    // Whole chunks when the buffers allow (they are `padded(capacity)` long in the layer).
+    let lanes = nodes.len.div_ceil(EXP_CHUNK) * EXP_CHUNK;
+    let lanes = if act.len() >= lanes && nodes.inv_width_sq.len() >= lanes {
+        lanes
+    } else {
+        nodes.len
+    };
+    gaussians_impl::<FMA>(dist_sq, nodes.inv_width_sq, nodes.cutoff, &mut act[..lanes]);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn activate_avx2(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64], act: &mut [f64]) {
+    activate_impl::<true, BLOCK_AVX2>(z, nodes, dist_sq, act)
+}
+
+/// `dist_sq_i = ||z - u_i||^2` and `act_i = s_i(z)` (eq. 9) for the active nodes.
+/// `dist_sq` must hold `padded(len)` values, `act` at least `len`.
+pub(crate) fn activate(
+    isa: Isa,
+    z: &[f64],
+    nodes: Nodes<'_>,
+    dist_sq: &mut [f64],
+    act: &mut [f64],
+) {
+    if dist_sq.len() < padded(nodes.len) || act.len() < nodes.len {
+        return;
+    }
+    dispatch!(
+        isa,
+        activate_impl::<false, BLOCK_GENERIC>(z, nodes, dist_sq, act),
+        activate_avx2(z, nodes, dist_sq, act)
+    )
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn sq_dists_avx2(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64]) {
+    sq_dists_impl::<true, BLOCK_AVX2>(z, nodes, dist_sq)
+}
+
+/// `dist_sq_i = ||z - u_i||^2` for the active nodes (`dist_sq` holds `padded(len)` values).
+pub(crate) fn sq_dists(isa: Isa, z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64]) {
+    if dist_sq.len() < padded(nodes.len) {
+        return;
+    }
+    dispatch!(
+        isa,
+        sq_dists_impl::<false, BLOCK_GENERIC>(z, nodes, dist_sq),
+        sq_dists_avx2(z, nodes, dist_sq)
+    )
+}
+
+/// Rows of fixed length `N`: `out += sum_i s_i W_i`. Rows are taken four at a time
+/// (row `4q + r` goes to partial sum `r`: four independent FMA chains), groups of four zero
+/// activations are skipped, leftover rows go to partial sum 0; the partial sums are added as
+/// `(a0 + a1) + (a2 + a3)`.
+#[inline(always)]
+fn accumulate_n<const FMA: bool, const N: usize>(act: &[f64], weights: &[f64], out: &mut [f64]) {
+    let (mut a0, mut a1, mut a2, mut a3) = ([0.0f64; N], [0.0f64; N], [0.0f64; N], [0.0f64; N]);
+    let quads = weights.chunks_exact(4 * N);
+    let tail_w = quads.remainder();
+    let act_quads = act.chunks_exact(4);
+    let tail_s = act_quads.remainder();
+    for (w, s) in quads.zip(act_quads) {
+        let (s0, s1, s2, s3) = (s[0], s[1], s[2], s[3]);
+        if s0 == 0.0 && s1 == 0.0 && s2 == 0.0 && s3 == 0.0 {
+            continue;
+        }
+        for j in 0..N {
+            a0[j] = fmadd::<FMA>(s0, w[j], a0[j]);
+            a1[j] = fmadd::<FMA>(s1, w[N + j], a1[j]);
+            a2[j] = fmadd::<FMA>(s2, w[2 * N + j], a2[j]);
+            a3[j] = fmadd::<FMA>(s3, w[3 * N + j], a3[j]);
+        }
+    }
+    for (row, &s) in tail_w.chunks_exact(N).zip(tail_s) {
+        if s != 0.0 {
+            for j in 0..N {
+                a0[j] = fmadd::<FMA>(s, row[j], a0[j]);
+            }
+        }
+    }
+    for (j, o) in out.iter_mut().enumerate().take(N) {
+        *o += (a0[j] + a1[j]) + (a2[j] + a3[j]);
+    }
+}
+
+#[inline(always)]
+fn accumulate_dyn<const FMA: bool>(act: &[f64], weights: &[f64], out: &mut [f64]) {
+    let n = out.len();
+    for (row, &s) in weights.chunks_exact(n).zip(act) {
+        if s != 0.0 {
+            for (o, &w) in out.iter_mut().zip(row) {
+                *o = fmadd::<FMA>(s, w, *o);
+            }
+        }
+    }
+}
+
+/// `out += W^T S` for node-major rows of length `out.len()` (specialised for 1..=8 outputs).
+#[inline(always)]
+fn accumulate_impl<const FMA: bool>(act: &[f64], weights: &[f64], out: &mut [f64]) {
+    match out.len() {
+        0 => {}
+        1 => accumulate_n::<FMA, 1>(act, weights, out),
+        2 => accumulate_n::<FMA, 2>(act, weights, out),
+        3 => accumulate_n::<FMA, 3>(act, weights, out),
+        4 => accumulate_n::<FMA, 4>(act, weights, out),
+        5 => accumulate_n::<FMA, 5>(act, weights, out),
+        6 => accumulate_n::<FMA, 6>(act, weights, out),
+        7 => accumulate_n::<FMA, 7>(act, weights, out),
+        8 => accumulate_n::<FMA, 8>(act, weights, out),
+        _ => accumulate_dyn::<FMA>(act, weights, out),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn accumulate_avx2(act: &[f64], weights: &[f64], out: &mut [f64]) {
+    accumulate_impl::<true>(act, weights, out)
+}
+
+/// `out += W^T S` (eq. 10) for node-major `weights` with rows of length `out.len()`.
+pub(crate) fn accumulate(isa: Isa, act: &[f64], weights: &[f64], out: &mut [f64]) {
+    dispatch!(
+        isa,
+        accumulate_impl::<false>(act, weights, out),
+        accumulate_avx2(act, weights, out)
+    )
+}
+
+/// `W_i <- decay W_i + gain s_i e` for rows of fixed length `N`, four rows at a time .
+#[inline(always)]
+fn update_n<const FMA: bool, const N: usize>(
+    act: &[f64],
+    weights: &mut [f64],
+    e: &[f64],
+    decay: f64,
+    gain: f64,
+) {
+    let mut ev = [0.0f64; N];
+    for (v, &x) in ev.iter_mut().zip(e) {
+        *v = x;
+    }
+    let mut quads = weights.chunks_exact_mut(4 * N);
+    let act_quads = act.chunks_exact(4);
+    let tail_s = act_quads.remainder();
+    for (w, s) in quads.by_ref().zip(act_quads) {
+        let (s0, s1, s2, s3) = (s[0], s[1], s[2], s[3]);
+        if s0 == 0.0 && s1 == 0.0 && s2 == 0.0 && s3 == 0.0 {
+            if decay != 1.0 {
+                for x in w.iter_mut() {
+                    *x *= decay;
+                }
+            }
+            continue;
+        }
+        let (g0, g1, g2, g3) = (gain * s0, gain * s1, gain * s2, gain * s3);
+        for j in 0..N {
+            w[j] = fmadd::<FMA>(g0, ev[j], decay * w[j]);
+            w[N + j] = fmadd::<FMA>(g1, ev[j], decay * w[N + j]);
+            w[2 * N + j] = fmadd::<FMA>(g2, ev[j], decay * w[2 * N + j]);
+            w[3 * N + j] = fmadd::<FMA>(g3, ev[j], decay * w[3 * N + j]);
+        }
+    }
+    for (row, &s) in quads.into_remainder().chunks_exact_mut(N).zip(tail_s) {
+        if s != 0.0 {
+            let g = gain * s;
+            for j in 0..N {
+                row[j] = fmadd::<FMA>(g, ev[j], decay * row[j]);
+            }
+        } else if decay != 1.0 {
+            for x in row.iter_mut() {
+                *x *= decay;
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn update_dyn<const FMA: bool>(act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
+    let n = e.len();
+    if n == 0 {
+        return;
+    }
+    for (row, &s) in weights.chunks_exact_mut(n).zip(act) {
+        let g = gain * s;
+        if decay == 1.0 && g == 0.0 {
+            continue;
+        }
+        for (w, &ej) in row.iter_mut().zip(e) {
+            *w = fmadd::<FMA>(g, ej, decay * *w);
+        }
+    }
+}
+
+/// `W_i <- decay W_i + gain s_i e` for every row (rows with `s_i = 0` are only decayed, and
+/// skipped entirely when `decay == 1`); specialised for 1..=8 outputs.
+#[inline(always)]
+fn update_impl<const FMA: bool>(
+    act: &[f64],
+    weights: &mut [f64],
+    e: &[f64],
+    decay: f64,
+    gain: f64,
+) {
+    match e.len() {
+        0 => {}
+        1 => update_n::<FMA, 1>(act, weights, e, decay, gain),
+        2 => update_n::<FMA, 2>(act, weights, e, decay, gain),
+        3 => update_n::<FMA, 3>(act, weights, e, decay, gain),
+        4 => update_n::<FMA, 4>(act, weights, e, decay, gain),
+        5 => update_n::<FMA, 5>(act, weights, e, decay, gain),
+        6 => update_n::<FMA, 6>(act, weights, e, decay, gain),
+        7 => update_n::<FMA, 7>(act, weights, e, decay, gain),
+        8 => update_n::<FMA, 8>(act, weights, e, decay, gain),
+        _ => update_dyn::<FMA>(act, weights, e, decay, gain),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn update_avx2(act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
+    update_impl::<true>(act, weights, e, decay, gain)
+}
+
+/// One integration step of the update law, `W <- decay W + gain S e^T` (METHOD.md section 3).
+pub(crate) fn update(isa: Isa, act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
+    dispatch!(
+        isa,
+        update_impl::<false>(act, weights, e, decay, gain),
+        update_avx2(act, weights, e, decay, gain)
+    )
+}
+
+#[inline(always)]
+fn predict_impl<const FMA: bool, const B: usize>(
+    z: &[f64],
+    nodes: Nodes<'_>,
+    weights: &[f64],
+    out: &mut [f64],
+) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let blocks = nodes.len.div_ceil(B);
+    for b in 0..blocks {
+        let start = b * B;
+        let m = B.min(nodes.len - start);
+        let d2 = block_sq_dist::<FMA, B>(z, nodes.centres_t, nodes.stride, start);
+        let mut act = [0.0f64; B];
+        let inv = &nodes.inv_width_sq[start..start + m];
+        gaussians_impl::<FMA>(&d2[..m], inv, nodes.cutoff, &mut act[..m]);
+        if let Some(rows) = weights.get(start * n..(start + m) * n) {
+            accumulate_impl::<FMA>(&act[..m], rows, out);
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn predict_avx2(z: &[f64], nodes: Nodes<'_>, weights: &[f64], out: &mut [f64]) {
+    predict_impl::<true, BLOCK_AVX2>(z, nodes, weights, out)
+}
+
+/// `out += W^T S(z)` computed block by block on the stack, without touching layer state.
+pub(crate) fn predict(isa: Isa, z: &[f64], nodes: Nodes<'_>, weights: &[f64], out: &mut [f64]) {
+    if nodes.inv_width_sq.len() < nodes.len {
+        return;
+    }
+    dispatch!(
+        isa,
+        predict_impl::<false, BLOCK_GENERIC>(z, nodes, weights, out),
+        predict_avx2(z, nodes, weights, out)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn exp_neg(isa: Isa, x: f64) -> f64 {
+        // One node at the origin, z = sqrt(x), unit width: activation exp(-x).
+        let centres_t = [0.0; BLOCK];
+        let inv = [1.0; BLOCK];
+        let nodes = Nodes {
+            centres_t: &centres_t,
+            stride: BLOCK,
+            len: 1,
+            inv_width_sq: &inv,
+            cutoff: MAX_EXPONENT,
+        };
+        let mut d2 = [0.0; BLOCK];
+        let mut s = [0.0; 1];
+        activate(isa, &[x.sqrt()], nodes, &mut d2, &mut s);
+        // Compare with the exact exponent used.
+        assert!((d2[0] - x).abs() <= 1e-12 * (1.0 + x));
+        s[0] / (-d2[0]).exp()
+    }
+
+    #[test]
+    fn exp_matches_std_over_the_range() {
+        let mut worst: f64 = 0.0;
+        let mut x = 0.0;
+        while x <= MAX_EXPONENT {
+            for isa in [Isa::Generic, Isa::detect()] {
+                worst = worst.max((exp_neg(isa, x) - 1.0).abs());
+            }
+            let direct = exp_neg_impl::<false>(x);
+            worst = worst.max(((direct - (-x).exp()) / (-x).exp()).abs());
+            x += 0.0137;
+        }
+        assert!(worst < 1e-15, "worst relative error {worst:e}");
+        assert_eq!(exp_neg_impl::<false>(0.0), 1.0);
+        assert_eq!(gaussian(MAX_EXPONENT + 1.0, MAX_EXPONENT), 0.0);
+        assert_eq!(gaussian(f64::INFINITY, MAX_EXPONENT), 0.0);
+        assert_eq!(gaussian(f64::NAN, MAX_EXPONENT), 0.0);
+    }
+
+    #[test]
+    fn sq_dist_matches_naive() {
+        for d in 0..40 {
+            let a: Vec<f64> = (0..d).map(|k| (k as f64 * 0.37).sin()).collect();
+            let b: Vec<f64> = (0..d).map(|k| (k as f64 * 0.11).cos()).collect();
+            let naive: f64 = a.iter().zip(&b).map(|(x, y)| (x - y) * (x - y)).sum();
+            assert!((sq_dist(&a, &b) - naive).abs() <= 1e-12 * (1.0 + naive));
+        }
+    }
+
+    #[test]
+    fn output_and_update_specialisations_agree_with_dynamic() {
+        for isa in [Isa::Generic, Isa::detect()] {
+            for n in 1..=10usize {
+                let rows = 37;
+                let act: Vec<f64> = (0..rows)
+                    .map(|i| {
+                        if i % 5 == 0 {
+                            0.0
+                        } else {
+                            (i as f64 * 0.3).cos().abs()
+                        }
+                    })
+                    .collect();
+                let w: Vec<f64> = (0..rows * n).map(|k| (k as f64 * 0.7).sin()).collect();
+                let mut out = vec![0.5; n];
+                accumulate(isa, &act, &w, &mut out);
+                let mut reference = vec![0.5; n];
+                accumulate_dyn::<false>(&act, &w, &mut reference);
+                for (a, b) in out.iter().zip(&reference) {
+                    assert!((a - b).abs() < 1e-12);
+                }
+                let e: Vec<f64> = (0..n).map(|j| j as f64 - 2.0).collect();
+                for decay in [1.0, 0.9] {
+                    let mut w1 = w.clone();
+                    let mut w2 = w.clone();
+                    update(isa, &act, &mut w1, &e, decay, 0.01);
+                    update_dyn::<false>(&act, &mut w2, &e, decay, 0.01);
+                    for (a, b) in w1.iter().zip(&w2) {
+                        assert!((a - b).abs() < 1e-12);
+                    }
+                }
+            }
+        }
+    }
+}

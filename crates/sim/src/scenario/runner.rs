@@ -1,0 +1,374 @@
+//! The closed loop of one scenario variant: desired trajectory -> admittance model
+//! (driven by the external-torque estimate) -> controller -> plant, sampled by the
+//! sensors at the control rate; with metrics and a time series.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use admittance_control::{
+    true_lumped_f, Admittance, AdmittanceInput, ComputedTorqueController, ControlInput, Controller, GrowthRequest,
+    NetworkId, NeuralController, PdController, StepStatus,
+};
+use admittance_dynamics::{forward_kinematics, Data, Model};
+use serde_json::{json, Value};
+
+use super::source::{ScenarioError, ScenarioSource};
+use super::spec::{ControllerKind, ObserverKind, Scenario, Trajectory};
+use crate::{Plant, Sensors};
+
+/// Options of a run that are not part of the scenario file.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Overrides the scenario's seed (sensor noise).
+    pub seed: Option<u64>,
+}
+
+/// The recorded time series of one variant: named columns, rows in time order.
+#[derive(Clone, Debug, Default)]
+pub struct TimeSeries {
+    /// Column names (the CSV header).
+    pub columns: Vec<String>,
+    /// Rows, each `columns.len()` long.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl TimeSeries {
+    /// Index of a column.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+}
+
+/// The outcome of one variant.
+#[derive(Clone, Debug)]
+pub struct VariantRun {
+    /// Variant name (`"base"` when the file has no variants).
+    pub name: String,
+    /// Metrics for summary.json.
+    pub metrics: BTreeMap<String, Value>,
+    /// The time series.
+    pub series: TimeSeries,
+    /// Joint names in chain order.
+    pub joints: Vec<String>,
+}
+
+/// A controller of any kind, keeping the neural one reachable for its node hooks.
+enum AnyController {
+    Neural(Box<NeuralController>),
+    Other(Box<dyn Controller>),
+}
+
+impl AnyController {
+    fn as_dyn(&mut self) -> &mut dyn Controller {
+        match self {
+            AnyController::Neural(c) => c.as_mut(),
+            AnyController::Other(c) => c.as_mut(),
+        }
+    }
+    fn neural(&self) -> Option<&NeuralController> {
+        match self {
+            AnyController::Neural(c) => Some(c),
+            AnyController::Other(_) => None,
+        }
+    }
+}
+
+fn rms(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    (values.iter().map(|v| v * v).sum::<f64>() / values.len() as f64).sqrt()
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(|a, b| a.total_cmp(b));
+    values[values.len() / 2]
+}
+
+/// Per-joint accumulators of a window.
+struct JointStats {
+    sum_sq: Vec<f64>,
+    max_abs: Vec<f64>,
+    count: usize,
+}
+
+impl JointStats {
+    fn new(n: usize) -> Self {
+        Self { sum_sq: vec![0.0; n], max_abs: vec![0.0; n], count: 0 }
+    }
+    fn add(&mut self, values: impl Iterator<Item = f64>) {
+        for (i, v) in values.enumerate() {
+            self.sum_sq[i] += v * v;
+            self.max_abs[i] = self.max_abs[i].max(v.abs());
+        }
+        self.count += 1;
+    }
+    fn rms(&self) -> Vec<f64> {
+        self.sum_sq.iter().map(|s| if self.count > 0 { (s / self.count as f64).sqrt() } else { 0.0 }).collect()
+    }
+}
+
+/// Resolves, validates and runs one variant of a scenario file.
+pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, options: &RunOptions) -> Result<VariantRun, ScenarioError> {
+    let scenario: Scenario = source.resolve(variant)?;
+    let urdf = scenario.urdf_path(path);
+    let model = Model::from_urdf_file(&urdf, scenario.arm.base.as_deref(), scenario.arm.tip.as_deref())
+        .map_err(|e| source.error_at("arm.urdf", variant, e.to_string(), Some("the path is relative to the scenario file".into())))?;
+    let joints: Vec<String> = model.joint_names().map(String::from).collect();
+    let problems = scenario.validate(&joints);
+    if !problems.is_empty() {
+        return Err(source.invalid(variant, &problems));
+    }
+    let n = model.nq();
+    let trajectory = Trajectory::new(&scenario.trajectory, &joints);
+    let mut q_d = vec![0.0; n];
+    let mut qd_d = vec![0.0; n];
+    let mut qdd_d = vec![0.0; n];
+    trajectory.eval(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
+
+    let mut plant_config = scenario.plant.clone();
+    if plant_config.initial_q.is_empty() {
+        plant_config.initial_q = q_d.clone();
+    }
+    if let Some(seed) = options.seed.or(scenario.seed) {
+        plant_config.sensors.seed = seed;
+    }
+    let sim_err = |e: crate::SimError| source.error_at("plant", variant, e.to_string(), None);
+    let mut plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
+    let mut sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz).map_err(sim_err)?;
+    let dt = plant.control_dt();
+
+    let nominal = Arc::new(model.clone());
+    let ctrl_err = |e: admittance_control::ConfigError, section: &str| {
+        let text = e.to_string();
+        source.error_at(&format!("controller.{section}"), variant, text, None)
+    };
+    let mut controller = match scenario.controller.kind {
+        ControllerKind::Neural => AnyController::Neural(Box::new(
+            NeuralController::new(nominal.clone(), &scenario.controller.neural).map_err(|e| ctrl_err(e, "neural"))?,
+        )),
+        ControllerKind::Pd => {
+            let cfg = scenario.controller.pd.as_ref().expect("validated");
+            AnyController::Other(Box::new(PdController::new(nominal.clone(), cfg).map_err(|e| ctrl_err(e, "pd"))?))
+        }
+        ControllerKind::ComputedTorque => {
+            let cfg = scenario.controller.computed_torque.as_ref().expect("validated");
+            AnyController::Other(Box::new(
+                ComputedTorqueController::new(nominal.clone(), cfg).map_err(|e| ctrl_err(e, "computed_torque"))?,
+            ))
+        }
+    };
+    let mut admittance = match &scenario.admittance {
+        Some(spec) if spec.enabled => Some(
+            Admittance::new(n, &spec.config).map_err(|e| source.error_at("admittance", variant, e.to_string(), None))?,
+        ),
+        _ => None,
+    };
+
+    let effort: Vec<f64> = plant.effort_limits().to_vec();
+    let mut kin_data = Data::new(plant.model());
+    let mut f_data = Data::new(plant.model());
+    let tip = plant.model().tip_frame;
+
+    // Dynamic nodes (experiment C).
+    let dynamic = scenario.dynamic_nodes.clone();
+    let mut discarded: Option<usize> = None;
+    let mut growth_requested = false;
+    let mut approx = [Vec::<f64>::new(), Vec::new(), Vec::new()];
+    let mut f_true = vec![0.0; n];
+
+    let steps = (scenario.duration / dt).round() as usize;
+    let decimation = scenario.output.decimation;
+    let mut series = TimeSeries::default();
+    series.columns.push("t".into());
+    for prefix in ["q_d", "q_r", "q", "qdot", "q_meas", "tau_cmd", "tau_applied", "tau_ext", "tau_ext_hat"] {
+        for j in &joints {
+            series.columns.push(format!("{prefix}.{j}"));
+        }
+    }
+    series.columns.push("ee_error".into());
+    let with_f = dynamic.is_some();
+    if with_f {
+        for prefix in ["f", "f_hat"] {
+            for j in &joints {
+                series.columns.push(format!("{prefix}.{j}"));
+            }
+        }
+    }
+    if controller.neural().is_some() {
+        series.columns.push("nodes.f".into());
+    }
+
+    let mut tau = vec![0.0; n];
+    let mut q_meas = vec![0.0; n];
+    let mut qdot_meas = vec![0.0; n];
+    let mut estimate = vec![0.0; n];
+    let zeros = vec![0.0; n];
+    let mut q_r = vec![0.0; n];
+    let mut qd_r = vec![0.0; n];
+    let mut qdd_r = vec![0.0; n];
+    let mut tracking = JointStats::new(n);
+    let mut torque = JointStats::new(n);
+    let mut estimate_error = JointStats::new(n);
+    let mut ee_errors = Vec::new();
+    let mut deadzone_steps = vec![0usize; n];
+    let mut window_steps = 0usize;
+    let mut step_times: Vec<f64> = Vec::with_capacity(steps.min(200_000));
+    let timing_stride = (steps / 200_000).max(1);
+    let (mut faults, mut limit_violations, mut nonfinite_torques) = (0usize, 0usize, 0usize);
+    let mut max_weight_norm: f64 = 0.0;
+
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        trajectory.eval(t, &mut q_d, &mut qd_d, &mut qdd_d);
+        {
+            let m = sensors.sample(t, plant.q(), &tau).map_err(sim_err)?;
+            q_meas.copy_from_slice(&m.q);
+            qdot_meas.copy_from_slice(&m.qdot);
+        }
+        // External-torque estimate.
+        match scenario.observer.kind {
+            ObserverKind::None => estimate.fill(0.0),
+            ObserverKind::Oracle => estimate.copy_from_slice(plant.tau_ext()),
+        }
+        // Compliant reference.
+        match admittance.as_mut() {
+            Some(adm) => {
+                let input = AdmittanceInput { q_d: &q_d, qdot_d: &qd_d, qddot_d: &qdd_d, external_torque_estimate: &estimate };
+                let _ = adm.step(&input, dt);
+                q_r.copy_from_slice(adm.q_r());
+                qd_r.copy_from_slice(adm.qdot_r());
+                qdd_r.copy_from_slice(adm.qddot_r());
+            }
+            None => {
+                q_r.copy_from_slice(&q_d);
+                qd_r.copy_from_slice(&qd_d);
+                qdd_r.copy_from_slice(&qdd_d);
+            }
+        }
+        // Dynamic-node events.
+        if let (Some(d), AnyController::Neural(nn)) = (&dynamic, &mut controller) {
+            if discarded.is_none() && t >= d.discard_time {
+                discarded = Some(nn.discard(NetworkId::F, d.upsilon));
+            }
+            if !growth_requested && t >= d.grow_time {
+                let request = GrowthRequest { nodes: d.grow_nodes, interval_steps: d.grow_interval_steps, params: d.growth };
+                nn.request_growth(NetworkId::F, request).map_err(|e| source.error_at("dynamic_nodes.growth", variant, e.to_string(), None))?;
+                growth_requested = true;
+            }
+        }
+        let input = ControlInput {
+            time: t,
+            q: &q_meas,
+            qdot: &qdot_meas,
+            q_ref: &q_r,
+            qdot_ref: &qd_r,
+            qddot_ref: &qdd_r,
+            external_torque_estimate: if admittance.is_some() { &zeros } else { &estimate },
+        };
+        let start = Instant::now();
+        let status = controller.as_dyn().step(&input, dt, &mut tau);
+        let elapsed = start.elapsed().as_secs_f64();
+        if k % timing_stride == 0 && step_times.len() < step_times.capacity() {
+            step_times.push(elapsed * 1e6);
+        }
+        if matches!(status, StepStatus::Fault(_)) {
+            faults += 1;
+        }
+        for (i, t_i) in tau.iter().enumerate() {
+            if !t_i.is_finite() {
+                nonfinite_torques += 1;
+            } else if t_i.abs() > effort[i] * (1.0 + 1e-12) {
+                limit_violations += 1;
+            }
+        }
+        // Approximation of f (experiment C) with the controller's alpha.
+        if let (Some(d), Some(nn)) = (&dynamic, controller.neural()) {
+            let _ = true_lumped_f(plant.model(), &mut f_data, plant.q(), plant.qdot(), nn.alpha(), nn.alpha_dot(), &mut f_true);
+            let phase_ends = [d.discard_time, d.grow_time, scenario.duration];
+            for (p, end) in phase_ends.iter().enumerate() {
+                if t >= end - d.approximation_window && t < *end {
+                    for (a, b) in f_true.iter().zip(nn.f_hat()) {
+                        approx[p].push(a - b);
+                    }
+                }
+            }
+            max_weight_norm = max_weight_norm.max(nn.weight_norm(NetworkId::F));
+        }
+
+        plant.step_control(&tau).map_err(sim_err)?;
+        let record = plant.record();
+        let in_window = t >= scenario.evaluation_start;
+        // Hand error by forward kinematics of the true angles against the reference.
+        let _ = forward_kinematics(plant.model(), &mut kin_data, &q_r);
+        let p_ref = kin_data.frame_placements[tip].translation;
+        let _ = forward_kinematics(plant.model(), &mut kin_data, plant.q());
+        let p = kin_data.frame_placements[tip].translation;
+        let ee_error = (p - p_ref).norm();
+        if in_window {
+            tracking.add(q_r.iter().zip(plant.q()).map(|(r, q)| r - q));
+            torque.add(tau.iter().copied());
+            estimate_error.add(estimate.iter().zip(&record.tau_ext).map(|(e, t)| e - t));
+            ee_errors.push(ee_error);
+            window_steps += 1;
+            for (c, dz) in deadzone_steps.iter_mut().zip(&record.in_deadzone) {
+                *c += *dz as usize;
+            }
+        }
+        if k % decimation == 0 {
+            let mut row = Vec::with_capacity(series.columns.len());
+            row.push(t);
+            for v in [&q_d[..], &q_r, plant.q(), plant.qdot(), &q_meas, &tau, &record.applied, &record.tau_ext, &estimate] {
+                row.extend_from_slice(v);
+            }
+            row.push(ee_error);
+            if with_f {
+                row.extend_from_slice(&f_true);
+                row.extend_from_slice(controller.neural().map(|c| c.f_hat()).unwrap_or(&zeros));
+            }
+            if let Some(nn) = controller.neural() {
+                row.push(nn.node_count(NetworkId::F) as f64);
+            }
+            series.rows.push(row);
+        }
+    }
+
+    let mut metrics = BTreeMap::new();
+    metrics.insert("tracking_rmse".into(), json!(tracking.rms()));
+    metrics.insert("tracking_max_abs".into(), json!(tracking.max_abs));
+    metrics.insert("ee_error_rms".into(), json!(rms(&ee_errors)));
+    metrics.insert("ee_error_max".into(), json!(ee_errors.iter().cloned().fold(0.0, f64::max)));
+    metrics.insert("torque_rms".into(), json!(torque.rms()));
+    metrics.insert("torque_max_abs".into(), json!(torque.max_abs));
+    let fractions: Vec<f64> = deadzone_steps.iter().map(|c| *c as f64 / window_steps.max(1) as f64).collect();
+    metrics.insert("deadzone_time_fraction".into(), json!(fractions));
+    metrics.insert("controller_step_median_us".into(), json!(median(&mut step_times)));
+    metrics.insert("faults".into(), json!(faults));
+    metrics.insert("torque_limit_violations".into(), json!(limit_violations));
+    metrics.insert("nonfinite_torques".into(), json!(nonfinite_torques));
+    metrics.insert("steps".into(), json!(steps));
+    metrics.insert("external_torque_rmse".into(), json!(estimate_error.rms()));
+    let mut nodes = serde_json::Map::new();
+    if let Some(nn) = controller.neural() {
+        for id in nn.network_ids() {
+            nodes.insert(id.as_str().into(), json!(nn.node_count(id)));
+        }
+        let norms: serde_json::Map<String, Value> = nn.network_ids().map(|id| (id.as_str().to_string(), json!(nn.weight_norm(id)))).collect();
+        metrics.insert("weight_norm_final".into(), Value::Object(norms));
+    }
+    metrics.insert("nodes".into(), Value::Object(nodes));
+    if let (Some(_), Some(nn)) = (&dynamic, controller.neural()) {
+        metrics.insert("approx_rmse_full".into(), json!(rms(&approx[0])));
+        metrics.insert("approx_rmse_after_discard".into(), json!(rms(&approx[1])));
+        metrics.insert("approx_rmse_after_growth".into(), json!(rms(&approx[2])));
+        metrics.insert("nodes_discarded".into(), json!(discarded.unwrap_or(0)));
+        metrics.insert("nodes_added".into(), json!(nn.growth_progress(NetworkId::F).added));
+        metrics.insert("weight_norm_max".into(), json!(max_weight_norm));
+    }
+    Ok(VariantRun { name: variant.unwrap_or("base").to_string(), metrics, series, joints })
+}
