@@ -34,7 +34,10 @@ VENV="$ROOT/.venv-bench"
 TARGET_DIR="${CARGO_TARGET_DIR:-$ROOT/target}"
 case "$TARGET_DIR" in /*) ;; *) TARGET_DIR="$ROOT/$TARGET_DIR" ;; esac
 PIN_BIN="$TARGET_DIR/pinocchio_timing"
-OURS_BIN="$TARGET_DIR/release/examples/timing"
+# Ours is built for the host CPU, as Pinocchio's program is (-march=native), in a target
+# directory of its own so that the normal build is not invalidated.
+OURS_TARGET="$TARGET_DIR/bench-native"
+OURS_BIN="$OURS_TARGET/release/examples/timing"
 ALGOS="rnea crba aba jacobian coriolis gravity fk"
 
 [ -f "$URDF" ] || { echo "no such URDF: $URDF" >&2; exit 2; }
@@ -88,7 +91,7 @@ fi
 HAVE_OURS=0
 if [ -f "$ROOT/crates/dynamics/examples/timing.rs" ]; then
     echo "== cargo build --release -p admittance-dynamics --example timing" >&2
-    cargo build --quiet --release -p admittance-dynamics --example timing
+    RUSTFLAGS="-C target-cpu=native" CARGO_TARGET_DIR="$OURS_TARGET" cargo build --quiet --release -p admittance-dynamics --example timing
     HAVE_OURS=1
 else
     echo "== crates/dynamics/examples/timing.rs does not exist yet: timing Pinocchio only" >&2
