@@ -62,17 +62,19 @@ print(f"rows {r['rows']}, nodes {r['nodes']}, pattern width {fr['pattern_width']
 print(f"Rust full fit (centres + Gram + {len(fr['lambda_scan'])} lambdas + validation): {fr['times']['total_s']:.2f} s "
       f"(gram {fr['times']['gram_s']:.2f}, solve {fr['times']['solve_s']:.2f}, validation {fr['times']['validation_s']:.2f})")
 rust = r["fixed_nodes_fit_s"]
-print(f"Rust fixed-node fit (features + Gram + solve): {rust:.2f} s (fastest of {r['fixed_nodes_fit_runs_s']})")
+print(f"Rust fixed-node fit (features + Gram + solve): {rust:.2f} s (fastest of {[round(v, 2) for v in r['fixed_nodes_fit_runs_s']]}), "
+      f"CPU {r['fixed_nodes_fit_cpu_s']:.2f} s")
 print(f"Rust features-only pass over the training data: {r['features_pass_s']:.2f} s")
 for mode in ("matmul", "syrk"):
     n = json.load(open(os.path.join(d, f"numpy_{mode}.json")))
     print(f"numpy ({mode}) same fit: {n['total_s']:.2f} s (fastest of {[round(v, 2) for v in n['runs_s']]})   Rust/numpy = {rust / n['total_s']:.3f}   "
-          f"weights rel diff {n['weights_rel_diff_vs_rust']:.2e}   peak RSS {maxrss(os.path.join(d, f'numpy_{mode}.time')):.0f} MB")
+          f"CPU {n['cpu_s']:.2f} s (Rust/numpy {r['fixed_nodes_fit_cpu_s'] / n['cpu_s']:.3f})   weights rel diff {n['weights_rel_diff_vs_rust']:.2e}   peak RSS {maxrss(os.path.join(d, f'numpy_{mode}.time')):.0f} MB")
 g = r.get("growth")
 if g:
     print(f"growth by {g['nodes_added']} nodes: {g['grow_s']:.2f} s (cross terms {g['grow_cross_terms_s']:.2f}), "
           f"fixed-node retrain on the grown nodes {g['retrain_s']:.2f} s, ratio {g['grow_over_retrain']:.3f}; "
-          f"ratio to the full fit {g['grow_over_full_fit']:.3f}; weights rel diff vs retrain {g['weights_rel_diff_vs_retrain']:.1e}")
+          f"ratio to the full fit {g['grow_over_full_fit']:.3f}; CPU ratio {min(g['grow_cpu_s']) / min(g['retrain_cpu_s']):.3f}; "
+          f"weights rel diff vs retrain {g['weights_rel_diff_vs_retrain']:.1e}")
 print(f"Rust peak RSS (whole example, data sets included): {maxrss(os.path.join(d, 'rust.time')):.0f} MB")
 print(f"exp: fast {r['fast_exp_ns_per_value']:.2f} ns/value, libm {r['libm_exp_ns_per_value']:.2f} ns/value")
 EOF

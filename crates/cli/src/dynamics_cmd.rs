@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use admittance_dynamics::{
-    coriolis_matrix, crba, forward_kinematics, gravity_torque, rnea, tip_jacobian, Data, DynamicsError, JointKind, Model,
+    coriolis_matrix, crba, forward_kinematics, gravity_torque, rnea, tip_jacobian, Data,
+    DynamicsError, JointKind, Model,
 };
 use clap::Args;
 use serde_json::json;
@@ -48,14 +49,21 @@ pub struct ModelArgs {
 }
 
 fn load(chain: &ChainArgs) -> Result<Model, CliError> {
-    Model::from_urdf_file(&chain.urdf, chain.base.as_deref(), chain.tip.as_deref()).map_err(|e| match e {
-        DynamicsError::Io { .. } => CliError::usage(e.to_string()),
-        other => CliError::input(other.to_string()),
+    Model::from_urdf_file(&chain.urdf, chain.base.as_deref(), chain.tip.as_deref()).map_err(|e| {
+        match e {
+            DynamicsError::Io { .. } => CliError::usage(e.to_string()),
+            other => CliError::input(other.to_string()),
+        }
     })
 }
 
 /// Parses `a,b,c` into exactly `expected` finite numbers.
-pub fn parse_list(flag: &str, text: &str, expected: usize, what: &str) -> Result<Vec<f64>, CliError> {
+pub fn parse_list(
+    flag: &str,
+    text: &str,
+    expected: usize,
+    what: &str,
+) -> Result<Vec<f64>, CliError> {
     let mut values = Vec::new();
     for (k, part) in text.split(',').enumerate() {
         let part = part.trim();
@@ -79,7 +87,9 @@ pub fn parse_list(flag: &str, text: &str, expected: usize, what: &str) -> Result
 }
 
 fn rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+    (0..m.nrows())
+        .map(|i| m.row(i).iter().copied().collect())
+        .collect()
 }
 
 pub fn dynamics(args: &DynamicsArgs) -> Result<(), CliError> {
@@ -102,16 +112,29 @@ pub fn dynamics(args: &DynamicsArgs) -> Result<(), CliError> {
     }
     let mut data = Data::new(&model);
     // Lengths were checked above, so the algorithms cannot fail here.
-    let internal = |e: admittance_dynamics::DimensionError| CliError { code: 1, message: e.to_string() };
-    let tau = rnea(&model, &mut data, &q, &v, &a).map_err(internal)?.as_slice().to_vec();
+    let internal = |e: admittance_dynamics::DimensionError| CliError {
+        code: 1,
+        message: e.to_string(),
+    };
+    let tau = rnea(&model, &mut data, &q, &v, &a)
+        .map_err(internal)?
+        .as_slice()
+        .to_vec();
     let mass = rows(crba(&model, &mut data, &q).map_err(internal)?);
-    let gravity = gravity_torque(&model, &mut data, &q).map_err(internal)?.as_slice().to_vec();
+    let gravity = gravity_torque(&model, &mut data, &q)
+        .map_err(internal)?
+        .as_slice()
+        .to_vec();
     let coriolis = rows(coriolis_matrix(&model, &mut data, &q, &v).map_err(internal)?);
     let jac = tip_jacobian(&model, &mut data, &q).map_err(internal)?;
-    let jacobian: Vec<Vec<f64>> = (0..6).map(|r| jac.row(r).iter().copied().collect()).collect();
+    let jacobian: Vec<Vec<f64>> = (0..6)
+        .map(|r| jac.row(r).iter().copied().collect())
+        .collect();
     forward_kinematics(&model, &mut data, &q).map_err(internal)?;
     let tip = data.tip_placement(&model);
-    let rotation: Vec<Vec<f64>> = (0..3).map(|r| tip.rotation.row(r).iter().copied().collect()).collect();
+    let rotation: Vec<Vec<f64>> = (0..3)
+        .map(|r| tip.rotation.row(r).iter().copied().collect())
+        .collect();
     let out = json!({
         "joints": names,
         "tau": tau,
@@ -147,9 +170,28 @@ pub fn model(args: &ModelArgs) -> Result<(), CliError> {
     let mut out = String::new();
     outln!(out, "robot    {}", model.robot_name);
     outln!(out, "source   {}", model.source);
-    outln!(out, "chain    {} -> {} ({} moving joints)", model.base_link, model.tip().name, model.nq());
+    outln!(
+        out,
+        "chain    {} -> {} ({} moving joints)",
+        model.base_link,
+        model.tip().name,
+        model.nq()
+    );
     out.push('\n');
-    outln!(out, "{:>2}  {:<18} {:<10} {:<24} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}", "#", "joint", "type", "axis", "lower", "upper", "velocity", "effort", "damping", "friction");
+    outln!(
+        out,
+        "{:>2}  {:<18} {:<10} {:<24} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}",
+        "#",
+        "joint",
+        "type",
+        "axis",
+        "lower",
+        "upper",
+        "velocity",
+        "effort",
+        "damping",
+        "friction"
+    );
     for (i, j) in model.joints.iter().enumerate() {
         let axis = format!("({:.3}, {:.3}, {:.3})", j.axis.x, j.axis.y, j.axis.z);
         let kind = match j.kind {
@@ -157,7 +199,8 @@ pub fn model(args: &ModelArgs) -> Result<(), CliError> {
             JointKind::Continuous => "continuous",
             JointKind::Prismatic => "prismatic",
         };
-        outln!(out, 
+        outln!(
+            out,
             "{:>2}  {:<18} {:<10} {:<24} {:>9} {:>9} {:>9} {:>9} {:>8.4} {:>8.4}",
             i,
             j.name,
@@ -174,13 +217,19 @@ pub fn model(args: &ModelArgs) -> Result<(), CliError> {
     out.push('\n');
     outln!(out, "{:<28} {:>10}  carried by", "link", "mass (kg)");
     for lm in &model.link_masses {
-        let by = lm.joint.map_or("base (static)".to_string(), |j| format!("joint {}", model.joints[j].name));
+        let by = lm.joint.map_or("base (static)".to_string(), |j| {
+            format!("joint {}", model.joints[j].name)
+        });
         outln!(out, "{:<28} {:>10.4}  {}", lm.link, lm.mass, by);
     }
     out.push('\n');
     outln!(out, "total moving mass {:.4} kg", model.total_moving_mass());
     if !model.excluded_links.is_empty() {
-        outln!(out, "not modelled (hang off the chain through other moving joints): {}", model.excluded_links.join(", "));
+        outln!(
+            out,
+            "not modelled (hang off the chain through other moving joints): {}",
+            model.excluded_links.join(", ")
+        );
     }
     crate::write_stdout(&out);
     Ok(())

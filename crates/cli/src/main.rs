@@ -5,6 +5,7 @@
 
 mod dynamics_cmd;
 mod run_cmd;
+mod train_cmd;
 
 use std::process::ExitCode;
 
@@ -26,6 +27,10 @@ enum Command {
     Model(dynamics_cmd::ModelArgs),
     /// Run a scenario (every variant) and write its run folder: summary.json, CSVs, report.
     Run(run_cmd::RunArgs),
+    /// Train the learned observer's flat RBF network on free-motion data and save it.
+    Train(train_cmd::TrainArgs),
+    /// Add nodes to a trained network (incremental growth) and save the result.
+    Grow(train_cmd::GrowArgs),
 }
 
 /// A failure with its exit code and a short message.
@@ -36,10 +41,16 @@ pub struct CliError {
 
 impl CliError {
     pub fn usage(message: impl Into<String>) -> Self {
-        Self { code: 2, message: message.into() }
+        Self {
+            code: 2,
+            message: message.into(),
+        }
     }
     pub fn input(message: impl Into<String>) -> Self {
-        Self { code: 3, message: message.into() }
+        Self {
+            code: 3,
+            message: message.into(),
+        }
     }
 }
 
@@ -55,13 +66,22 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
             // One line: clap's first line, plus where to look for usage.
             let rendered = e.render().to_string();
-            let first = rendered.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            let first = rendered
+                .lines()
+                .next()
+                .unwrap_or("invalid arguments")
+                .trim_start_matches("error: ");
             eprintln!("admittance: {first} (see `admittance --help`)");
             return ExitCode::from(2);
         }
@@ -70,6 +90,8 @@ fn main() -> ExitCode {
         Command::Dynamics(args) => dynamics_cmd::dynamics(&args),
         Command::Model(args) => dynamics_cmd::model(&args),
         Command::Run(args) => run_cmd::run(&args),
+        Command::Train(args) => train_cmd::train(&args),
+        Command::Grow(args) => train_cmd::grow(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

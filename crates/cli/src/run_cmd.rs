@@ -35,19 +35,41 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let options = RunOptions { seed: args.seed };
     let quiet = args.quiet;
     let started = std::time::Instant::now();
-    let summary = run_scenario(&args.scenario, &args.out, args.variant.as_deref(), &args.set, &options, |name, k, total| {
-        if !quiet {
-            eprintln!("[{}/{}] variant {name} ({:.1} s elapsed)", k + 1, total, started.elapsed().as_secs_f64());
-        }
-    })
+    let summary = run_scenario(
+        &args.scenario,
+        &args.out,
+        args.variant.as_deref(),
+        &args.set,
+        &options,
+        |name, k, total| {
+            if !quiet {
+                eprintln!(
+                    "[{}/{}] variant {name} ({:.1} s elapsed)",
+                    k + 1,
+                    total,
+                    started.elapsed().as_secs_f64()
+                );
+            }
+        },
+    )
     .map_err(|e| match e {
         RunError::Scenario(s) => CliError::input(s.to_string()),
-        io @ RunError::Io { .. } => CliError { code: 1, message: io.to_string() },
+        io @ RunError::Io { .. } => CliError {
+            code: 1,
+            message: io.to_string(),
+        },
     })?;
     if args.json {
-        crate::write_stdout(&format!("{}\n", serde_json::to_string_pretty(&summary.json).unwrap_or_default()));
+        crate::write_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&summary.json).unwrap_or_default()
+        ));
     } else if !quiet {
-        eprintln!("wrote {} ({:.1} s)", summary.out_dir.display(), started.elapsed().as_secs_f64());
+        eprintln!(
+            "wrote {} ({:.1} s)",
+            summary.out_dir.display(),
+            started.elapsed().as_secs_f64()
+        );
     }
     Ok(())
 }

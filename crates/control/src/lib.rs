@@ -14,7 +14,9 @@
 //! * Baselines: [`PdController`] (PD, PD + nominal gravity) and
 //!   [`ComputedTorqueController`].
 //! * [`Observer`]: the interface of external-torque estimators, with [`NoObserver`] and
-//!   [`OracleObserver`].
+//!   [`OracleObserver`]; [`MomentumObserver`], the generalised-momentum observer with a
+//!   nominal model (METHOD.md section 5, baseline); [`LearnedObserver`], the flat RBF
+//!   network's estimate `f_hat(q, q', q'') - tau`, low-pass filtered (eq. 19).
 //!
 //! Every `step`/`update` is allocation-free and panic-free after construction, and every
 //! torque written is finite and within the effort limits. Configurations are serde structs
@@ -41,6 +43,8 @@ mod baselines;
 mod config;
 mod controller;
 mod error;
+mod learned;
+mod momentum;
 mod neural;
 mod observer;
 mod safe_hold;
@@ -52,6 +56,8 @@ pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, Pd
 pub use config::JointValues;
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};
+pub use learned::LearnedObserver;
+pub use momentum::{MomentumObserver, MomentumObserverConfig};
 pub use neural::{
     true_lumped_f, FNetworkConfig, GrowthProgress, GrowthRequest, NetworkConfig, NetworkId,
     NeuralController, NeuralControllerConfig,

@@ -317,6 +317,59 @@ fn no_step_allocates_after_construction() {
         }
     });
     assert_eq!(allocs, 0, "observers");
+    let mut momentum =
+        MomentumObserver::new(common::baxter(), &MomentumObserverConfig::default()).unwrap();
+    let q = [0.1, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
+    let v = [0.2, -0.1, 0.3, 0.1, -0.2, 0.1, 0.05];
+    let bad = [f64::NAN; 7];
+    let allocs = count(|| {
+        for k in 0..100 {
+            let input = ObserverInput {
+                time: 0.0,
+                q: if k == 50 { &bad } else { &q },
+                qdot: &v,
+                qddot: &z,
+                tau_commanded: &v,
+            };
+            let _ = momentum.update(&input, 1e-3, &mut est);
+        }
+        momentum.reset();
+    });
+    assert_eq!(allocs, 0, "momentum observer (with a fault step)");
+    let model = {
+        use admittance_learning::broad::{fit, BroadConfig, Dataset};
+        let rows = 300;
+        let inputs: Vec<f64> = (0..rows * 21)
+            .map(|k| ((k * 7919) % 1000) as f64 * 1e-3 - 0.5)
+            .collect();
+        let targets: Vec<f64> = (0..rows * 7)
+            .map(|k| ((k * 104729) % 1000) as f64 * 1e-3)
+            .collect();
+        let data = Dataset::new(&inputs, &targets, 21, 7).unwrap();
+        let config = BroadConfig {
+            nodes: 50,
+            centre_subsample: 300,
+            lambda_grid: vec![1e-6],
+            threads: 1,
+            ..BroadConfig::for_arm(7)
+        };
+        fit(&data, None, &config).unwrap().0
+    };
+    let mut learned = LearnedObserver::new(model, 20.0).unwrap();
+    let allocs = count(|| {
+        for k in 0..100 {
+            let input = ObserverInput {
+                time: 0.0,
+                q: if k == 50 { &bad } else { &q },
+                qdot: &v,
+                qddot: &v,
+                tau_commanded: &v,
+            };
+            let _ = learned.update(&input, 1e-3, &mut est);
+        }
+        learned.reset();
+    });
+    assert_eq!(allocs, 0, "learned observer (with a fault step)");
 
     // The counter itself works.
     assert!(count(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);

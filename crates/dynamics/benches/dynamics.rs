@@ -9,7 +9,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector6;
 
 fn baxter() -> Model {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/baxter_left_arm.urdf");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/baxter_left_arm.urdf");
     Model::from_urdf_file(&path, Some("base"), Some("left_hand")).expect("Baxter model")
 }
 
@@ -21,20 +22,38 @@ fn algorithms(c: &mut Criterion) {
     let a = [1.0, 0.5, -0.5, 0.2, 0.3, -0.1, 0.7];
     let w = Vector6::new(1.0, 2.0, 3.0, 0.1, 0.2, 0.3);
     let mut group = c.benchmark_group("baxter");
-    group.bench_function("rnea", |b| b.iter(|| black_box(rnea(&model, &mut data, black_box(&q), &v, &a).is_ok())));
-    group.bench_function("rnea_with_tip_wrench", |b| {
-        b.iter(|| black_box(rnea_with_tip_wrench(&model, &mut data, black_box(&q), &v, &a, &w).is_ok()))
+    group.bench_function("rnea", |b| {
+        b.iter(|| black_box(rnea(&model, &mut data, black_box(&q), &v, &a).is_ok()))
     });
-    group.bench_function("crba", |b| b.iter(|| black_box(crba(&model, &mut data, black_box(&q)).is_ok())));
-    group.bench_function("aba", |b| b.iter(|| black_box(aba(&model, &mut data, black_box(&q), &v, &a).is_ok())));
-    group.bench_function("coriolis", |b| b.iter(|| black_box(coriolis_matrix(&model, &mut data, black_box(&q), &v).is_ok())));
-    group.bench_function("gravity", |b| b.iter(|| black_box(gravity_torque(&model, &mut data, black_box(&q)).is_ok())));
+    group.bench_function("rnea_with_tip_wrench", |b| {
+        b.iter(|| {
+            black_box(rnea_with_tip_wrench(&model, &mut data, black_box(&q), &v, &a, &w).is_ok())
+        })
+    });
+    group.bench_function("crba", |b| {
+        b.iter(|| black_box(crba(&model, &mut data, black_box(&q)).is_ok()))
+    });
+    group.bench_function("aba", |b| {
+        b.iter(|| black_box(aba(&model, &mut data, black_box(&q), &v, &a).is_ok()))
+    });
+    group.bench_function("coriolis", |b| {
+        b.iter(|| black_box(coriolis_matrix(&model, &mut data, black_box(&q), &v).is_ok()))
+    });
+    group.bench_function("gravity", |b| {
+        b.iter(|| black_box(gravity_torque(&model, &mut data, black_box(&q)).is_ok()))
+    });
     group.bench_function("nonlinear_effects", |b| {
         b.iter(|| black_box(nonlinear_effects(&model, &mut data, black_box(&q), &v).is_ok()))
     });
-    group.bench_function("forward_kinematics", |b| b.iter(|| black_box(forward_kinematics(&model, &mut data, black_box(&q)).is_ok())));
-    group.bench_function("jacobian", |b| b.iter(|| black_box(tip_jacobian(&model, &mut data, black_box(&q)).is_ok())));
-    group.bench_function("jdot_qdot", |b| b.iter(|| black_box(tip_jdot_qdot(&model, &mut data, black_box(&q), &v).is_ok())));
+    group.bench_function("forward_kinematics", |b| {
+        b.iter(|| black_box(forward_kinematics(&model, &mut data, black_box(&q)).is_ok()))
+    });
+    group.bench_function("jacobian", |b| {
+        b.iter(|| black_box(tip_jacobian(&model, &mut data, black_box(&q)).is_ok()))
+    });
+    group.bench_function("jdot_qdot", |b| {
+        b.iter(|| black_box(tip_jdot_qdot(&model, &mut data, black_box(&q), &v).is_ok()))
+    });
     group.finish();
 }
 

@@ -18,7 +18,10 @@ const PER_BATCH: usize = 100;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let urdf = args.get(1).map(String::as_str).unwrap_or("models/baxter_left_arm.urdf");
+    let urdf = args
+        .get(1)
+        .map(String::as_str)
+        .unwrap_or("models/baxter_left_arm.urdf");
     let tip = args.get(2).map(String::as_str);
     let model = match Model::from_urdf_file(urdf.as_ref(), None, tip) {
         Ok(m) => m,
@@ -29,11 +32,17 @@ fn main() {
     };
     let n = model.nq();
     // TIMING_BATCHES=1 makes one quick pass (e.g. under callgrind).
-    let batches: usize = std::env::var("TIMING_BATCHES").ok().and_then(|b| b.parse().ok()).unwrap_or(DEFAULT_BATCHES).max(1);
+    let batches: usize = std::env::var("TIMING_BATCHES")
+        .ok()
+        .and_then(|b| b.parse().ok())
+        .unwrap_or(DEFAULT_BATCHES)
+        .max(1);
     let mut data = Data::new(&model);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut draw = |scale: f64| -> Vec<Vec<f64>> {
-        (0..STATES).map(|_| (0..n).map(|_| rng.random_range(-scale..scale)).collect()).collect()
+        (0..STATES)
+            .map(|_| (0..n).map(|_| rng.random_range(-scale..scale)).collect())
+            .collect()
     };
     let (qs, vs, as_) = (draw(1.5), draw(2.0), draw(5.0));
 

@@ -19,7 +19,11 @@ pub struct UrdfError {
 impl fmt::Display for UrdfError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.line {
-            Some(line) => write!(f, "{}:{}: {}: {}", self.file, line, self.element, self.problem),
+            Some(line) => write!(
+                f,
+                "{}:{}: {}: {}",
+                self.file, line, self.element, self.problem
+            ),
             None => write!(f, "{}: {}: {}", self.file, self.element, self.problem),
         }
     }
@@ -52,11 +56,19 @@ impl std::error::Error for DimensionError {}
 
 /// Checks that a slice has one value per joint.
 #[inline(always)]
-pub(crate) fn check_len(argument: &'static str, values: &[f64], expected: usize) -> Result<(), DimensionError> {
+pub(crate) fn check_len(
+    argument: &'static str,
+    values: &[f64],
+    expected: usize,
+) -> Result<(), DimensionError> {
     if values.len() == expected {
         Ok(())
     } else {
-        Err(DimensionError { argument, expected, found: values.len() })
+        Err(DimensionError {
+            argument,
+            expected,
+            found: values.len(),
+        })
     }
 }
 

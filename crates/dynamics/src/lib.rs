@@ -43,12 +43,21 @@ pub use spatial::{Force, Inertia, Motion, Transform};
 impl Model {
     /// Loads the chain between `base` (default: the root link) and `tip` (default: the
     /// single leaf link) from a URDF file.
-    pub fn from_urdf_file(path: &std::path::Path, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+    pub fn from_urdf_file(
+        path: &std::path::Path,
+        base: Option<&str>,
+        tip: Option<&str>,
+    ) -> Result<Model, DynamicsError> {
         urdf::load_file(path, base, tip)
     }
 
     /// Loads the chain from URDF text; `source` names the text in error messages.
-    pub fn from_urdf_str(text: &str, source: &str, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+    pub fn from_urdf_str(
+        text: &str,
+        source: &str,
+        base: Option<&str>,
+        tip: Option<&str>,
+    ) -> Result<Model, DynamicsError> {
         urdf::load_str(text, source, base, tip)
     }
 }

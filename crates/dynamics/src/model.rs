@@ -81,8 +81,14 @@ impl Joint {
     #[inline(always)]
     pub fn motion_subspace(&self) -> Motion {
         match self.kind {
-            JointKind::Prismatic => Motion { linear: self.axis, angular: Vector3::zeros() },
-            _ => Motion { linear: Vector3::zeros(), angular: self.axis },
+            JointKind::Prismatic => Motion {
+                linear: self.axis,
+                angular: Vector3::zeros(),
+            },
+            _ => Motion {
+                linear: Vector3::zeros(),
+                angular: self.axis,
+            },
         }
     }
 
@@ -168,7 +174,11 @@ pub struct Payload {
 impl Payload {
     /// A point mass at `com` in the tip frame.
     pub fn point_mass(mass: f64, com: Vector3<f64>) -> Self {
-        Self { mass, com, inertia: Matrix3::zeros() }
+        Self {
+            mass,
+            com,
+            inertia: Matrix3::zeros(),
+        }
     }
 }
 

@@ -74,12 +74,18 @@ impl Default for Transform {
 impl Transform {
     /// The identity transform.
     pub fn identity() -> Self {
-        Self { rotation: Matrix3::identity(), translation: Vector3::zeros() }
+        Self {
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
     }
 
     /// A transform from a rotation and a translation.
     pub fn new(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Self {
-        Self { rotation, translation }
+        Self {
+            rotation,
+            translation,
+        }
     }
 
     /// Composition `self * other`: first `other` (grandchild to child), then `self`.
@@ -94,7 +100,10 @@ impl Transform {
     /// The inverse transform (parent to child).
     pub fn inverse(&self) -> Transform {
         let rt = self.rotation.transpose();
-        Transform { rotation: rt, translation: -(rt * self.translation) }
+        Transform {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
     }
 
     /// Maps a point from child to parent coordinates.
@@ -107,14 +116,19 @@ impl Transform {
     #[inline(always)]
     pub fn act_motion(&self, m: &Motion) -> Motion {
         let ang = self.rotation * m.angular;
-        Motion { linear: self.rotation * m.linear + self.translation.cross(&ang), angular: ang }
+        Motion {
+            linear: self.rotation * m.linear + self.translation.cross(&ang),
+            angular: ang,
+        }
     }
 
     /// Expresses a parent-frame motion in the child frame.
     #[inline(always)]
     pub fn act_inv_motion(&self, m: &Motion) -> Motion {
         Motion {
-            linear: self.rotation.tr_mul(&(m.linear - self.translation.cross(&m.angular))),
+            linear: self
+                .rotation
+                .tr_mul(&(m.linear - self.translation.cross(&m.angular))),
             angular: self.rotation.tr_mul(&m.angular),
         }
     }
@@ -123,7 +137,10 @@ impl Transform {
     #[inline(always)]
     pub fn act_force(&self, f: &Force) -> Force {
         let lin = self.rotation * f.linear;
-        Force { linear: lin, angular: self.rotation * f.angular + self.translation.cross(&lin) }
+        Force {
+            linear: lin,
+            angular: self.rotation * f.angular + self.translation.cross(&lin),
+        }
     }
 
     /// Expresses a parent-frame force in the child frame.
@@ -131,7 +148,9 @@ impl Transform {
     pub fn act_inv_force(&self, f: &Force) -> Force {
         Force {
             linear: self.rotation.tr_mul(&f.linear),
-            angular: self.rotation.tr_mul(&(f.angular - self.translation.cross(&f.linear))),
+            angular: self
+                .rotation
+                .tr_mul(&(f.angular - self.translation.cross(&f.linear))),
         }
     }
 }
@@ -148,7 +167,10 @@ pub struct Motion {
 impl Motion {
     /// The zero motion.
     pub fn zero() -> Self {
-        Self { linear: Vector3::zeros(), angular: Vector3::zeros() }
+        Self {
+            linear: Vector3::zeros(),
+            angular: Vector3::zeros(),
+        }
     }
 
     /// Motion cross product `self x m` (derivative of a motion carried by `self`).
@@ -185,7 +207,10 @@ impl Motion {
     /// Scales both parts.
     #[inline(always)]
     pub fn scaled(&self, s: f64) -> Motion {
-        Motion { linear: self.linear * s, angular: self.angular * s }
+        Motion {
+            linear: self.linear * s,
+            angular: self.angular * s,
+        }
     }
 }
 
@@ -193,7 +218,10 @@ impl std::ops::Add for Motion {
     type Output = Motion;
     #[inline(always)]
     fn add(self, o: Motion) -> Motion {
-        Motion { linear: self.linear + o.linear, angular: self.angular + o.angular }
+        Motion {
+            linear: self.linear + o.linear,
+            angular: self.angular + o.angular,
+        }
     }
 }
 
@@ -209,7 +237,10 @@ pub struct Force {
 impl Force {
     /// The zero wrench.
     pub fn zero() -> Self {
-        Self { linear: Vector3::zeros(), angular: Vector3::zeros() }
+        Self {
+            linear: Vector3::zeros(),
+            angular: Vector3::zeros(),
+        }
     }
 
     /// As a 6-vector `[force; moment]`.
@@ -236,7 +267,10 @@ impl std::ops::Add for Force {
     type Output = Force;
     #[inline(always)]
     fn add(self, o: Force) -> Force {
-        Force { linear: self.linear + o.linear, angular: self.angular + o.angular }
+        Force {
+            linear: self.linear + o.linear,
+            angular: self.angular + o.angular,
+        }
     }
 }
 
@@ -276,7 +310,11 @@ impl Default for Inertia {
 impl Inertia {
     /// A massless body.
     pub fn zero() -> Self {
-        Self { mass: 0.0, first_moment: Vector3::zeros(), rotational: Matrix3::zeros() }
+        Self {
+            mass: 0.0,
+            first_moment: Vector3::zeros(),
+            rotational: Matrix3::zeros(),
+        }
     }
 
     /// From mass, centre of mass and the rotational inertia about the centre of mass,
@@ -284,7 +322,11 @@ impl Inertia {
     pub fn from_com(mass: f64, com: Vector3<f64>, inertia_about_com: Matrix3<f64>) -> Self {
         let c = skew(&com);
         // Parallel-axis theorem: I_o = I_c - m [c]x [c]x.
-        Self { mass, first_moment: com * mass, rotational: inertia_about_com - c * c * mass }
+        Self {
+            mass,
+            first_moment: com * mass,
+            rotational: inertia_about_com - c * c * mass,
+        }
     }
 
     /// Centre of mass (the origin for a massless body).
@@ -344,7 +386,11 @@ impl Inertia {
             }
             rot[(i, i)] += diag;
         }
-        Inertia { mass: m, first_moment: rh + p * m, rotational: rot }
+        Inertia {
+            mass: m,
+            first_moment: rh + p * m,
+            rotational: rot,
+        }
     }
 
     /// Sum of two inertias expressed in the same frame.
@@ -411,7 +457,8 @@ pub(crate) fn transform_articulated_inertia(x: &Transform, ia: &Matrix6<f64>) ->
     let mut out = Matrix6::zeros();
     out.fixed_view_mut::<3, 3>(0, 0).copy_from(&a);
     out.fixed_view_mut::<3, 3>(0, 3).copy_from(&top_right);
-    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&top_right.transpose());
+    out.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&top_right.transpose());
     out.fixed_view_mut::<3, 3>(3, 3).copy_from(&bottom_right);
     out
 }
@@ -436,8 +483,14 @@ mod tests {
     #[test]
     fn force_and_motion_transforms_preserve_power() {
         let x = sample_transform();
-        let m = Motion { linear: Vector3::new(0.1, 0.2, -0.3), angular: Vector3::new(1.0, -2.0, 0.5) };
-        let f = Force { linear: Vector3::new(3.0, -1.0, 2.0), angular: Vector3::new(0.4, 0.1, -0.2) };
+        let m = Motion {
+            linear: Vector3::new(0.1, 0.2, -0.3),
+            angular: Vector3::new(1.0, -2.0, 0.5),
+        };
+        let f = Force {
+            linear: Vector3::new(3.0, -1.0, 2.0),
+            angular: Vector3::new(0.4, 0.1, -0.2),
+        };
         let p_child = f.dot(&m);
         let p_parent = x.act_force(&f).dot(&x.act_motion(&m));
         assert!((p_child - p_parent).abs() < 1e-12);
@@ -455,7 +508,10 @@ mod tests {
             Vector3::new(0.1, -0.05, 0.2),
             Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.25, 0.03, -0.02, 0.03, 0.2),
         );
-        let m = Motion { linear: Vector3::new(0.1, 0.2, -0.3), angular: Vector3::new(1.0, -2.0, 0.5) };
+        let m = Motion {
+            linear: Vector3::new(0.1, 0.2, -0.3),
+            angular: Vector3::new(1.0, -2.0, 0.5),
+        };
         // Momentum computed in the child then moved to the parent equals the parent-frame
         // inertia applied to the parent-frame motion.
         let direct = x.act_force(&inertia.mul_motion(&m));
@@ -465,9 +521,11 @@ mod tests {
         assert!((as_matrix - inertia.mul_motion(&m).to_vector()).norm() < 1e-12);
         let ia = transform_articulated_inertia(&x, &inertia.to_matrix());
         assert!((ia - inertia.transformed(&x).to_matrix()).norm() < 1e-12);
-        assert!((inertia.inertia_about_com()
-            - Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.25, 0.03, -0.02, 0.03, 0.2))
-        .norm()
-            < 1e-12);
+        assert!(
+            (inertia.inertia_about_com()
+                - Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.25, 0.03, -0.02, 0.03, 0.2))
+            .norm()
+                < 1e-12
+        );
     }
 }

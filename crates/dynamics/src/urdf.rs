@@ -63,7 +63,12 @@ impl Ctx<'_> {
         self.doc.text_pos_at(node.range().start).row
     }
 
-    fn err(&self, node: Option<Node>, element: impl Into<String>, problem: impl Into<String>) -> UrdfError {
+    fn err(
+        &self,
+        node: Option<Node>,
+        element: impl Into<String>,
+        problem: impl Into<String>,
+    ) -> UrdfError {
         UrdfError {
             file: self.file.to_string(),
             line: node.map(|n| self.line(n)),
@@ -73,7 +78,9 @@ impl Ctx<'_> {
     }
 
     fn number(&self, node: Node, element: &str, attr: &str) -> Result<Option<f64>, UrdfError> {
-        let Some(text) = node.attribute(attr) else { return Ok(None) };
+        let Some(text) = node.attribute(attr) else {
+            return Ok(None);
+        };
         parse_finite(text.trim())
             .map(Some)
             .map_err(|p| self.err(Some(node), format!("{element} attribute '{attr}'"), p))
@@ -84,8 +91,15 @@ impl Ctx<'_> {
             .ok_or_else(|| self.err(Some(node), element, format!("missing attribute '{attr}'")))
     }
 
-    fn vector3(&self, node: Node, element: &str, attr: &str) -> Result<Option<Vector3<f64>>, UrdfError> {
-        let Some(text) = node.attribute(attr) else { return Ok(None) };
+    fn vector3(
+        &self,
+        node: Node,
+        element: &str,
+        attr: &str,
+    ) -> Result<Option<Vector3<f64>>, UrdfError> {
+        let Some(text) = node.attribute(attr) else {
+            return Ok(None);
+        };
         let parts: Vec<&str> = text.split_whitespace().collect();
         if parts.len() != 3 {
             return Err(self.err(
@@ -103,10 +117,16 @@ impl Ctx<'_> {
     }
 
     fn origin(&self, parent: Node, element: &str) -> Result<Transform, UrdfError> {
-        let Some(origin) = child(parent, "origin") else { return Ok(Transform::identity()) };
+        let Some(origin) = child(parent, "origin") else {
+            return Ok(Transform::identity());
+        };
         let el = format!("{element} <origin>");
-        let xyz = self.vector3(origin, &el, "xyz")?.unwrap_or_else(Vector3::zeros);
-        let rpy = self.vector3(origin, &el, "rpy")?.unwrap_or_else(Vector3::zeros);
+        let xyz = self
+            .vector3(origin, &el, "xyz")?
+            .unwrap_or_else(Vector3::zeros);
+        let rpy = self
+            .vector3(origin, &el, "rpy")?
+            .unwrap_or_else(Vector3::zeros);
         Ok(Transform::new(rpy_to_matrix(rpy.x, rpy.y, rpy.z), xyz))
     }
 }
@@ -120,7 +140,8 @@ fn parse_finite(text: &str) -> Result<f64, String> {
 }
 
 fn child<'a, 'i>(node: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
-    node.children().find(|c| c.is_element() && c.tag_name().name() == tag)
+    node.children()
+        .find(|c| c.is_element() && c.tag_name().name() == tag)
 }
 
 fn parse_link(ctx: &Ctx, node: Node) -> Result<LinkInfo, UrdfError> {
@@ -148,7 +169,10 @@ fn parse_link(ctx: &Ctx, node: Node) -> Result<LinkInfo, UrdfError> {
                 .ok_or_else(|| ctx.err(Some(inertial), &el, "missing <inertia>"))?;
             let iel = format!("{el} <inertia>");
             let mut v = [0.0; 6];
-            for (k, attr) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"].iter().enumerate() {
+            for (k, attr) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+                .iter()
+                .enumerate()
+            {
                 v[k] = ctx.required_number(inode, &iel, attr)?;
             }
             let tensor = Matrix3::new(v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5]);
@@ -159,7 +183,11 @@ fn parse_link(ctx: &Ctx, node: Node) -> Result<LinkInfo, UrdfError> {
             Some((Inertia::from_com(mass, origin.translation, about_com), mass))
         }
     };
-    Ok(LinkInfo { name, line: ctx.line(node), inertia })
+    Ok(LinkInfo {
+        name,
+        line: ctx.line(node),
+        inertia,
+    })
 }
 
 /// Positive definite with principal moments satisfying the triangle inequality.
@@ -183,7 +211,11 @@ fn check_inertia_tensor(tensor: &Matrix3<f64>) -> Result<(), String> {
     Ok(())
 }
 
-fn parse_joint(ctx: &Ctx, node: Node, links: &HashMap<String, usize>) -> Result<JointInfo, UrdfError> {
+fn parse_joint(
+    ctx: &Ctx,
+    node: Node,
+    links: &HashMap<String, usize>,
+) -> Result<JointInfo, UrdfError> {
     let name = node
         .attribute("name")
         .ok_or_else(|| ctx.err(Some(node), "<joint>", "missing attribute 'name'"))?
@@ -213,16 +245,28 @@ fn parse_joint(ctx: &Ctx, node: Node, links: &HashMap<String, usize>) -> Result<
         }
     };
     if let Some(m) = child(node, "mimic") {
-        return Err(ctx.err(Some(m), format!("{element} <mimic>"), "mimic joints are not supported"));
+        return Err(ctx.err(
+            Some(m),
+            format!("{element} <mimic>"),
+            "mimic joints are not supported",
+        ));
     }
     let link_ref = |tag: &str| -> Result<usize, UrdfError> {
         let n = child(node, tag)
             .ok_or_else(|| ctx.err(Some(node), &element, format!("missing <{tag}>")))?;
-        let link = n
-            .attribute("link")
-            .ok_or_else(|| ctx.err(Some(n), format!("{element} <{tag}>"), "missing attribute 'link'"))?;
+        let link = n.attribute("link").ok_or_else(|| {
+            ctx.err(
+                Some(n),
+                format!("{element} <{tag}>"),
+                "missing attribute 'link'",
+            )
+        })?;
         links.get(link).copied().ok_or_else(|| {
-            ctx.err(Some(n), format!("{element} <{tag}>"), format!("link '{link}' is not defined"))
+            ctx.err(
+                Some(n),
+                format!("{element} <{tag}>"),
+                format!("link '{link}' is not defined"),
+            )
         })
     };
     let parent = link_ref("parent")?;
@@ -250,21 +294,34 @@ fn parse_joint(ctx: &Ctx, node: Node, links: &HashMap<String, usize>) -> Result<
         if let Some(v) = ctx.number(l, &el, "velocity")? {
             limits.velocity = v;
         }
-        if matches!(kind, RawKind::Moving(JointKind::Revolute | JointKind::Prismatic)) {
+        if matches!(
+            kind,
+            RawKind::Moving(JointKind::Revolute | JointKind::Prismatic)
+        ) {
             limits.lower = ctx.number(l, &el, "lower")?.unwrap_or(0.0);
             limits.upper = ctx.number(l, &el, "upper")?.unwrap_or(0.0);
             if limits.lower > limits.upper {
                 return Err(ctx.err(
                     Some(l),
                     el,
-                    format!("lower limit {} is above upper limit {}", limits.lower, limits.upper),
+                    format!(
+                        "lower limit {} is above upper limit {}",
+                        limits.lower, limits.upper
+                    ),
                 ));
             }
         }
         if limits.effort < 0.0 || limits.velocity < 0.0 {
-            return Err(ctx.err(Some(l), el, "effort and velocity limits must not be negative"));
+            return Err(ctx.err(
+                Some(l),
+                el,
+                "effort and velocity limits must not be negative",
+            ));
         }
-    } else if matches!(kind, RawKind::Moving(JointKind::Revolute | JointKind::Prismatic)) {
+    } else if matches!(
+        kind,
+        RawKind::Moving(JointKind::Revolute | JointKind::Prismatic)
+    ) {
         return Err(ctx.err(
             Some(node),
             &element,
@@ -280,26 +337,52 @@ fn parse_joint(ctx: &Ctx, node: Node, links: &HashMap<String, usize>) -> Result<
             return Err(ctx.err(Some(d), el, "damping and friction must not be negative"));
         }
     }
-    Ok(JointInfo { name, line: ctx.line(node), kind, parent, child: child_link, origin, axis, limits, damping, friction })
+    Ok(JointInfo {
+        name,
+        line: ctx.line(node),
+        kind,
+        parent,
+        child: child_link,
+        origin,
+        axis,
+        limits,
+        damping,
+        friction,
+    })
 }
 
 /// Loads the chain from a URDF file. `base` defaults to the root link, `tip` to the
 /// single leaf link (an error when there are several).
-pub fn load_file(path: &Path, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+pub fn load_file(
+    path: &Path,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<Model, DynamicsError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| DynamicsError::Io { file: file.clone(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| DynamicsError::Io {
+        file: file.clone(),
+        source,
+    })?;
     load_str(&text, &file, base, tip)
 }
 
 /// Loads the chain from URDF text; `source` names it in errors.
-pub fn load_str(text: &str, source: &str, base: Option<&str>, tip: Option<&str>) -> Result<Model, DynamicsError> {
+pub fn load_str(
+    text: &str,
+    source: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<Model, DynamicsError> {
     let doc = Document::parse(text).map_err(|e| UrdfError {
         file: source.to_string(),
         line: Some(e.pos().row),
         element: "XML".into(),
         problem: format!("not well-formed XML: {e}"),
     })?;
-    let ctx = Ctx { file: source, doc: &doc };
+    let ctx = Ctx {
+        file: source,
+        doc: &doc,
+    };
     build(&ctx, base, tip).map_err(DynamicsError::from)
 }
 
@@ -316,13 +399,19 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
 
     let mut links: Vec<LinkInfo> = Vec::new();
     let mut link_index: HashMap<String, usize> = HashMap::new();
-    for node in root.children().filter(|n| n.is_element() && n.tag_name().name() == "link") {
+    for node in root
+        .children()
+        .filter(|n| n.is_element() && n.tag_name().name() == "link")
+    {
         let info = parse_link(ctx, node)?;
         if let Some(&prev) = link_index.get(&info.name) {
             return Err(ctx.err(
                 Some(node),
                 format!("link '{}'", info.name),
-                format!("duplicate link name (first defined on line {})", links[prev].line),
+                format!(
+                    "duplicate link name (first defined on line {})",
+                    links[prev].line
+                ),
             ));
         }
         link_index.insert(info.name.clone(), links.len());
@@ -335,14 +424,20 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
     let mut joints: Vec<JointInfo> = Vec::new();
     let mut joint_names: HashMap<String, usize> = HashMap::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
-    for node in root.children().filter(|n| n.is_element() && n.tag_name().name() == "joint") {
+    for node in root
+        .children()
+        .filter(|n| n.is_element() && n.tag_name().name() == "joint")
+    {
         let info = parse_joint(ctx, node, &link_index)?;
         let element = format!("joint '{}'", info.name);
         if let Some(&prev) = joint_names.get(&info.name) {
             return Err(ctx.err(
                 Some(node),
                 element,
-                format!("duplicate joint name (first defined on line {})", joints[prev].line),
+                format!(
+                    "duplicate joint name (first defined on line {})",
+                    joints[prev].line
+                ),
             ));
         }
         if info.parent == info.child {
@@ -379,13 +474,18 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
             }
         }
     }
-    let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+    let roots: Vec<usize> = (0..links.len())
+        .filter(|&l| parent_joint[l].is_none())
+        .collect();
     if roots.len() > 1 {
         let names: Vec<&str> = roots.iter().map(|&l| links[l].name.as_str()).collect();
         return Err(ctx.err(
             Some(root),
             "<robot>",
-            format!("several root links ({}): the links must form one tree", names.join(", ")),
+            format!(
+                "several root links ({}): the links must form one tree",
+                names.join(", ")
+            ),
         ));
     }
     let root_link = roots[0];
@@ -398,12 +498,20 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
     let base_link = match base {
         None => root_link,
         Some(name) => *link_index.get(name).ok_or_else(|| {
-            ctx.err(None, format!("base link '{name}'"), "no link of that name in the file")
+            ctx.err(
+                None,
+                format!("base link '{name}'"),
+                "no link of that name in the file",
+            )
         })?,
     };
     let tip_link = match tip {
         Some(name) => *link_index.get(name).ok_or_else(|| {
-            ctx.err(None, format!("tip link '{name}'"), "no link of that name in the file")
+            ctx.err(
+                None,
+                format!("tip link '{name}'"),
+                "no link of that name in the file",
+            )
         })?,
         None => {
             let mut leaves = Vec::new();
@@ -476,9 +584,17 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
         link_masses: &mut Vec<LinkMass>,
         excluded: &mut Vec<String>,
     ) {
-        frames.push(Frame { name: links[link].name.clone(), parent_joint: body, placement });
+        frames.push(Frame {
+            name: links[link].name.clone(),
+            parent_joint: body,
+            placement,
+        });
         let mass = links[link].inertia.map(|(_, m)| m).unwrap_or(0.0);
-        link_masses.push(LinkMass { link: links[link].name.clone(), mass, joint: body });
+        link_masses.push(LinkMass {
+            link: links[link].name.clone(),
+            mass,
+            joint: body,
+        });
         if let (Some(b), Some((inertia, _))) = (body, links[link].inertia) {
             bodies[b] = bodies[b].add(&inertia.transformed(&placement));
         }
@@ -500,11 +616,19 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
                     link_masses,
                     excluded,
                 ),
-                RawKind::Moving(_) => collect_subtree(joints[j].child, links, joints, children, excluded),
+                RawKind::Moving(_) => {
+                    collect_subtree(joints[j].child, links, joints, children, excluded)
+                }
             }
         }
     }
-    fn collect_subtree(link: usize, links: &[LinkInfo], joints: &[JointInfo], children: &[Vec<usize>], out: &mut Vec<String>) {
+    fn collect_subtree(
+        link: usize,
+        links: &[LinkInfo],
+        joints: &[JointInfo],
+        children: &[Vec<usize>],
+        out: &mut Vec<String>,
+    ) {
         out.push(links[link].name.clone());
         for &j in &children[link] {
             collect_subtree(joints[j].child, links, joints, children, out);
@@ -539,7 +663,19 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
     // Second pass: frames and inertia.
     let mut body: Option<usize> = None;
     let mut placement = Transform::identity();
-    attach(base_link, placement, None, &links, &joints, &children, &on_path, &mut frames, &mut bodies, &mut link_masses, &mut excluded);
+    attach(
+        base_link,
+        placement,
+        None,
+        &links,
+        &joints,
+        &children,
+        &on_path,
+        &mut frames,
+        &mut bodies,
+        &mut link_masses,
+        &mut excluded,
+    );
     for &j in &path {
         let info = &joints[j];
         match info.kind {
@@ -549,13 +685,28 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
                 placement = Transform::identity();
             }
         }
-        attach(info.child, placement, body, &links, &joints, &children, &on_path, &mut frames, &mut bodies, &mut link_masses, &mut excluded);
+        attach(
+            info.child,
+            placement,
+            body,
+            &links,
+            &joints,
+            &children,
+            &on_path,
+            &mut frames,
+            &mut bodies,
+            &mut link_masses,
+            &mut excluded,
+        );
     }
 
     if model_joints.is_empty() {
         return Err(ctx.err(
             None,
-            format!("chain '{}' -> '{}'", links[base_link].name, links[tip_link].name),
+            format!(
+                "chain '{}' -> '{}'",
+                links[base_link].name, links[tip_link].name
+            ),
             "has no moving joint",
         ));
     }
@@ -578,7 +729,10 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
     }
 
     let tip_name = &links[tip_link].name;
-    let tip_frame = frames.iter().position(|f| &f.name == tip_name).unwrap_or(frames.len() - 1);
+    let tip_frame = frames
+        .iter()
+        .position(|f| &f.name == tip_name)
+        .unwrap_or(frames.len() - 1);
     Ok(Model {
         robot_name,
         source: ctx.file.to_string(),

@@ -64,5 +64,10 @@ fn no_algorithm_allocates_after_construction() {
         run(&mut data);
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
-    assert_eq!(after - before, 0, "{} allocations in 100 rounds of every algorithm", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "{} allocations in 100 rounds of every algorithm",
+        after - before
+    );
 }

@@ -57,7 +57,10 @@ fn expect_error(text: &str, fragments: &[&str]) {
         Ok(_) => panic!("accepted a bad URDF; expected an error mentioning {fragments:?}"),
         Err(e) => e.to_string(),
     };
-    assert!(err.starts_with("arm.urdf"), "error does not name the file: {err}");
+    assert!(
+        err.starts_with("arm.urdf"),
+        "error does not name the file: {err}"
+    );
     for f in fragments {
         assert!(err.contains(f), "error {err:?} does not mention {f:?}");
     }
@@ -88,8 +91,14 @@ fn wrong_root_element() {
 
 #[test]
 fn missing_parent_or_child_link() {
-    expect_error(&GOOD.replace(r#"<parent link="upper"/>"#, r#"<parent link="nowhere"/>"#), &["joint 'elbow'", "<parent>", "'nowhere'"]);
-    expect_error(&GOOD.replace(r#"<child link="lower"/>"#, ""), &["joint 'elbow'", "missing <child>"]);
+    expect_error(
+        &GOOD.replace(r#"<parent link="upper"/>"#, r#"<parent link="nowhere"/>"#),
+        &["joint 'elbow'", "<parent>", "'nowhere'"],
+    );
+    expect_error(
+        &GOOD.replace(r#"<child link="lower"/>"#, ""),
+        &["joint 'elbow'", "missing <child>"],
+    );
 }
 
 #[test]
@@ -104,69 +113,163 @@ fn loops_and_two_parents() {
         "</robot>",
         r#"<joint name="second" type="fixed"><parent link="base"/><child link="lower"/></joint></robot>"#,
     );
-    expect_error(&two_parents, &["joint 'second'", "already the child of joint 'elbow'"]);
+    expect_error(
+        &two_parents,
+        &["joint 'second'", "already the child of joint 'elbow'"],
+    );
 }
 
 #[test]
 fn duplicate_names() {
-    expect_error(&GOOD.replace(r#"<link name="hand"/>"#, r#"<link name="hand"/><link name="upper"/>"#), &["link 'upper'", "duplicate link name"]);
-    expect_error(&GOOD.replace(r#"name="elbow""#, r#"name="shoulder""#), &["joint 'shoulder'", "duplicate joint name"]);
+    expect_error(
+        &GOOD.replace(
+            r#"<link name="hand"/>"#,
+            r#"<link name="hand"/><link name="upper"/>"#,
+        ),
+        &["link 'upper'", "duplicate link name"],
+    );
+    expect_error(
+        &GOOD.replace(r#"name="elbow""#, r#"name="shoulder""#),
+        &["joint 'shoulder'", "duplicate joint name"],
+    );
 }
 
 #[test]
 fn unsupported_and_unknown_joint_types() {
-    expect_error(&GOOD.replace(r#"name="elbow" type="revolute""#, r#"name="elbow" type="spherical""#), &["joint 'elbow'", "unknown joint type 'spherical'"]);
-    expect_error(&GOOD.replace(r#"name="elbow" type="revolute""#, r#"name="elbow" type="floating""#), &["joint 'elbow'", "'floating' is not supported"]);
-    expect_error(&GOOD.replace(r#"name="elbow" type="revolute""#, r#"name="elbow" type="planar""#), &["joint 'elbow'", "'planar'"]);
-    expect_error(&GOOD.replace(r#"<axis xyz="0 1 0"/>
-    <limit lower="-2" upper="2" effort="30""#, r#"<axis xyz="0 1 0"/><mimic joint="shoulder"/>
-    <limit lower="-2" upper="2" effort="30""#), &["joint 'elbow' <mimic>", "not supported"]);
+    expect_error(
+        &GOOD.replace(
+            r#"name="elbow" type="revolute""#,
+            r#"name="elbow" type="spherical""#,
+        ),
+        &["joint 'elbow'", "unknown joint type 'spherical'"],
+    );
+    expect_error(
+        &GOOD.replace(
+            r#"name="elbow" type="revolute""#,
+            r#"name="elbow" type="floating""#,
+        ),
+        &["joint 'elbow'", "'floating' is not supported"],
+    );
+    expect_error(
+        &GOOD.replace(
+            r#"name="elbow" type="revolute""#,
+            r#"name="elbow" type="planar""#,
+        ),
+        &["joint 'elbow'", "'planar'"],
+    );
+    expect_error(
+        &GOOD.replace(
+            r#"<axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="30""#,
+            r#"<axis xyz="0 1 0"/><mimic joint="shoulder"/>
+    <limit lower="-2" upper="2" effort="30""#,
+        ),
+        &["joint 'elbow' <mimic>", "not supported"],
+    );
 }
 
 #[test]
 fn bad_masses() {
-    expect_error(&GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass value="0"/>"#), &["link 'lower'", "<mass>", "not positive"]);
-    expect_error(&GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass value="-3"/>"#), &["link 'lower'", "not positive"]);
-    expect_error(&GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass/>"#), &["link 'lower'", "missing attribute 'value'"]);
+    expect_error(
+        &GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass value="0"/>"#),
+        &["link 'lower'", "<mass>", "not positive"],
+    );
+    expect_error(
+        &GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass value="-3"/>"#),
+        &["link 'lower'", "not positive"],
+    );
+    expect_error(
+        &GOOD.replace(r#"<mass value="1.0"/>"#, r#"<mass/>"#),
+        &["link 'lower'", "missing attribute 'value'"],
+    );
 }
 
 #[test]
 fn bad_inertia_tensors() {
-    let not_pd = GOOD.replace(r#"ixx="0.01" ixy="0" ixz="0" iyy="0.01""#, r#"ixx="-0.01" ixy="0" ixz="0" iyy="0.01""#);
-    expect_error(&not_pd, &["link 'lower' <inertial> <inertia>", "not positive definite"]);
+    let not_pd = GOOD.replace(
+        r#"ixx="0.01" ixy="0" ixz="0" iyy="0.01""#,
+        r#"ixx="-0.01" ixy="0" ixz="0" iyy="0.01""#,
+    );
+    expect_error(
+        &not_pd,
+        &["link 'lower' <inertial> <inertia>", "not positive definite"],
+    );
     let triangle = GOOD.replace(r#"izz="0.005""#, r#"izz="0.5""#);
-    expect_error(&triangle, &["link 'lower' <inertial> <inertia>", "triangle inequality"]);
+    expect_error(
+        &triangle,
+        &["link 'lower' <inertial> <inertia>", "triangle inequality"],
+    );
 }
 
 #[test]
 fn non_finite_and_malformed_numbers() {
-    expect_error(&GOOD.replace(r#"<origin xyz="0 0 0.4"/>"#, r#"<origin xyz="0 NaN 0.4"/>"#), &["joint 'elbow' <origin>", "'xyz'", "not a finite number"]);
-    expect_error(&GOOD.replace(r#"<mass value="2.0"/>"#, r#"<mass value="inf"/>"#), &["link 'upper'", "not a finite number"]);
-    expect_error(&GOOD.replace(r#"effort="30""#, r#"effort="lots""#), &["joint 'elbow' <limit>", "'effort'", "not a number"]);
-    expect_error(&GOOD.replace(r#"<origin xyz="0 0 0.4"/>"#, r#"<origin xyz="0 0.4"/>"#), &["joint 'elbow' <origin>", "expected 3 numbers"]);
+    expect_error(
+        &GOOD.replace(r#"<origin xyz="0 0 0.4"/>"#, r#"<origin xyz="0 NaN 0.4"/>"#),
+        &["joint 'elbow' <origin>", "'xyz'", "not a finite number"],
+    );
+    expect_error(
+        &GOOD.replace(r#"<mass value="2.0"/>"#, r#"<mass value="inf"/>"#),
+        &["link 'upper'", "not a finite number"],
+    );
+    expect_error(
+        &GOOD.replace(r#"effort="30""#, r#"effort="lots""#),
+        &["joint 'elbow' <limit>", "'effort'", "not a number"],
+    );
+    expect_error(
+        &GOOD.replace(r#"<origin xyz="0 0 0.4"/>"#, r#"<origin xyz="0 0.4"/>"#),
+        &["joint 'elbow' <origin>", "expected 3 numbers"],
+    );
 }
 
 #[test]
 fn limits_and_axes() {
-    expect_error(&GOOD.replace(r#"<limit lower="-2" upper="2" effort="30" velocity="2"/>"#, ""), &["joint 'elbow'", "needs <limit"]);
-    expect_error(&GOOD.replace(r#"lower="-2" upper="2" effort="30""#, r#"lower="2" upper="-2" effort="30""#), &["joint 'elbow' <limit>", "above upper"]);
-    expect_error(&GOOD.replace(r#"<origin xyz="0 0 0.4"/>
-    <axis xyz="0 1 0"/>"#, r#"<origin xyz="0 0 0.4"/>
-    <axis xyz="0 0 0"/>"#), &["joint 'elbow' <axis>", "zero length"]);
+    expect_error(
+        &GOOD.replace(
+            r#"<limit lower="-2" upper="2" effort="30" velocity="2"/>"#,
+            "",
+        ),
+        &["joint 'elbow'", "needs <limit"],
+    );
+    expect_error(
+        &GOOD.replace(
+            r#"lower="-2" upper="2" effort="30""#,
+            r#"lower="2" upper="-2" effort="30""#,
+        ),
+        &["joint 'elbow' <limit>", "above upper"],
+    );
+    expect_error(
+        &GOOD.replace(
+            r#"<origin xyz="0 0 0.4"/>
+    <axis xyz="0 1 0"/>"#,
+            r#"<origin xyz="0 0 0.4"/>
+    <axis xyz="0 0 0"/>"#,
+        ),
+        &["joint 'elbow' <axis>", "zero length"],
+    );
 }
 
 #[test]
 fn tip_and_base_errors() {
-    let err = Model::from_urdf_str(GOOD, "arm.urdf", None, Some("gripper")).unwrap_err().to_string();
-    assert!(err.contains("tip link 'gripper'") && err.contains("no link of that name"), "{err}");
-    let err = Model::from_urdf_str(GOOD, "arm.urdf", Some("lower"), Some("upper")).unwrap_err().to_string();
+    let err = Model::from_urdf_str(GOOD, "arm.urdf", None, Some("gripper"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("tip link 'gripper'") && err.contains("no link of that name"),
+        "{err}"
+    );
+    let err = Model::from_urdf_str(GOOD, "arm.urdf", Some("lower"), Some("upper"))
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("not below the base link 'lower'"), "{err}");
     let branched = GOOD.replace(
         "</robot>",
         r#"<link name="camera"/><joint name="cam" type="fixed"><parent link="upper"/><child link="camera"/></joint></robot>"#,
     );
     let err = load(&branched).unwrap_err().to_string();
-    assert!(err.contains("ambiguous") && err.contains("hand") && err.contains("camera"), "{err}");
+    assert!(
+        err.contains("ambiguous") && err.contains("hand") && err.contains("camera"),
+        "{err}"
+    );
     // Naming the tip resolves it, and the camera's frame stays addressable.
     let model = Model::from_urdf_str(&branched, "arm.urdf", None, Some("hand")).unwrap();
     assert!(model.frame_index("camera").is_some());
@@ -187,8 +290,13 @@ fn a_massless_last_body_is_rejected() {
 
 #[test]
 fn missing_file_names_the_path() {
-    let err = Model::from_urdf_file("/nonexistent/arm.urdf".as_ref(), None, None).unwrap_err().to_string();
-    assert!(err.contains("/nonexistent/arm.urdf") && err.contains("cannot read"), "{err}");
+    let err = Model::from_urdf_file("/nonexistent/arm.urdf".as_ref(), None, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("/nonexistent/arm.urdf") && err.contains("cannot read"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -196,7 +304,10 @@ fn the_baxter_name_clash_is_handled() {
     // A fixed joint and a link are both called `left_hand` in the published description.
     let model = common::baxter();
     assert_eq!(model.tip().name, "left_hand");
-    assert_eq!(model.joint_names().collect::<Vec<_>>(), ["left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2"]);
+    assert_eq!(
+        model.joint_names().collect::<Vec<_>>(),
+        ["left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2"]
+    );
 }
 
 proptest! {

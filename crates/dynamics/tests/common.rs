@@ -10,8 +10,12 @@ pub fn repo_root() -> PathBuf {
 }
 
 pub fn baxter() -> Model {
-    Model::from_urdf_file(&repo_root().join("models/baxter_left_arm.urdf"), Some("base"), Some("left_hand"))
-        .expect("the project's Baxter model loads")
+    Model::from_urdf_file(
+        &repo_root().join("models/baxter_left_arm.urdf"),
+        Some("base"),
+        Some("left_hand"),
+    )
+    .expect("the project's Baxter model loads")
 }
 
 pub fn fixtures_dir() -> PathBuf {

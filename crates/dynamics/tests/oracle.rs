@@ -66,32 +66,51 @@ impl Checker {
     fn check(&mut self, what: &str, ours: &DMatrix<f64>, theirs: &DMatrix<f64>) {
         self.compared += 1;
         if ours.shape() != theirs.shape() {
-            self.failures.push(format!("{what}: shape {:?} vs {:?}", ours.shape(), theirs.shape()));
+            self.failures.push(format!(
+                "{what}: shape {:?} vs {:?}",
+                ours.shape(),
+                theirs.shape()
+            ));
             return;
         }
         let err = (ours - theirs).norm();
         let rel = err / theirs.norm().max(1e-12 / TOLERANCE);
         self.worst = self.worst.max(rel);
         if rel > TOLERANCE {
-            self.failures.push(format!("{what}: relative error {rel:.3e}\n ours {ours}\n pinocchio {theirs}"));
+            self.failures.push(format!(
+                "{what}: relative error {rel:.3e}\n ours {ours}\n pinocchio {theirs}"
+            ));
         }
     }
     fn vec(&mut self, what: &str, ours: &[f64], theirs: &[f64]) {
-        self.check(what, &DMatrix::from_column_slice(ours.len(), 1, ours), &DMatrix::from_column_slice(theirs.len(), 1, theirs));
+        self.check(
+            what,
+            &DMatrix::from_column_slice(ours.len(), 1, ours),
+            &DMatrix::from_column_slice(theirs.len(), 1, theirs),
+        );
     }
 }
 
 #[test]
 fn every_algorithm_agrees_with_pinocchio() {
     let dir = common::fixtures_dir().join("pinocchio");
-    let mut paths: Vec<_> = std::fs::read_dir(&dir).expect("fixtures present").map(|e| e.unwrap().path()).collect();
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)
+        .expect("fixtures present")
+        .map(|e| e.unwrap().path())
+        .collect();
     paths.sort();
-    let mut checker = Checker { failures: Vec::new(), worst: 0.0, compared: 0 };
+    let mut checker = Checker {
+        failures: Vec::new(),
+        worst: 0.0,
+        compared: 0,
+    };
     let (mut arms, mut cases) = (0, 0);
     for path in &paths {
-        let fixture: Fixture = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let fixture: Fixture =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
         let urdf = common::fixtures_dir().join(&fixture.urdf);
-        let mut model = Model::from_urdf_file(&urdf, Some(&fixture.base), Some(&fixture.tip)).unwrap();
+        let mut model =
+            Model::from_urdf_file(&urdf, Some(&fixture.base), Some(&fixture.tip)).unwrap();
         model.gravity = nalgebra::Vector3::from_column_slice(&fixture.gravity);
         let names: Vec<&str> = model.joint_names().collect();
         assert_eq!(names, fixture.joints, "{}", path.display());
@@ -99,42 +118,96 @@ fn every_algorithm_agrees_with_pinocchio() {
         arms += 1;
         for (k, c) in fixture.cases.iter().enumerate() {
             cases += 1;
-            let tag = |what: &str| format!("{} case {k} {what}", path.file_name().unwrap().to_string_lossy());
+            let tag = |what: &str| {
+                format!(
+                    "{} case {k} {what}",
+                    path.file_name().unwrap().to_string_lossy()
+                )
+            };
             let tau = rnea(&model, &mut data, &c.q, &c.v, &c.a).unwrap().clone();
             checker.vec(&tag("rnea"), tau.as_slice(), &c.tau);
             let m = crba(&model, &mut data, &c.q).unwrap().clone();
             checker.check(&tag("crba"), &m, &rows(&c.mass_matrix));
             let g = gravity_torque(&model, &mut data, &c.q).unwrap().clone();
             checker.vec(&tag("gravity"), g.as_slice(), &c.gravity_torque);
-            let cor = coriolis_matrix(&model, &mut data, &c.q, &c.v).unwrap().clone();
+            let cor = coriolis_matrix(&model, &mut data, &c.q, &c.v)
+                .unwrap()
+                .clone();
             checker.check(&tag("coriolis"), &cor, &rows(&c.coriolis));
-            let h = nonlinear_effects(&model, &mut data, &c.q, &c.v).unwrap().clone();
-            checker.vec(&tag("nonlinear effects"), h.as_slice(), &c.nonlinear_effects);
-            let qdd = aba(&model, &mut data, &c.q, &c.v, &c.aba_tau).unwrap().clone();
+            let h = nonlinear_effects(&model, &mut data, &c.q, &c.v)
+                .unwrap()
+                .clone();
+            checker.vec(
+                &tag("nonlinear effects"),
+                h.as_slice(),
+                &c.nonlinear_effects,
+            );
+            let qdd = aba(&model, &mut data, &c.q, &c.v, &c.aba_tau)
+                .unwrap()
+                .clone();
             checker.vec(&tag("aba"), qdd.as_slice(), &c.aba_qddot);
             forward_kinematics(&model, &mut data, &c.q).unwrap();
             let tip = *data.tip_placement(&model);
-            checker.vec(&tag("tip position"), tip.translation.as_slice(), &c.tip_position);
-            checker.check(&tag("tip rotation"), &DMatrix::from_fn(3, 3, |i, j| tip.rotation[(i, j)]), &rows(&c.tip_rotation));
+            checker.vec(
+                &tag("tip position"),
+                tip.translation.as_slice(),
+                &c.tip_position,
+            );
+            checker.check(
+                &tag("tip rotation"),
+                &DMatrix::from_fn(3, 3, |i, j| tip.rotation[(i, j)]),
+                &rows(&c.tip_rotation),
+            );
             for (name, fp) in &c.frames {
                 let Some(f) = model.frame_index(name) else {
-                    checker.failures.push(tag(&format!("frame '{name}' missing from the model")));
+                    checker
+                        .failures
+                        .push(tag(&format!("frame '{name}' missing from the model")));
                     continue;
                 };
                 let p = data.frame_placements[f];
-                checker.vec(&tag(&format!("frame {name} position")), p.translation.as_slice(), &fp.position);
-                checker.check(&tag(&format!("frame {name} rotation")), &DMatrix::from_fn(3, 3, |i, j| p.rotation[(i, j)]), &rows(&fp.rotation));
+                checker.vec(
+                    &tag(&format!("frame {name} position")),
+                    p.translation.as_slice(),
+                    &fp.position,
+                );
+                checker.check(
+                    &tag(&format!("frame {name} rotation")),
+                    &DMatrix::from_fn(3, 3, |i, j| p.rotation[(i, j)]),
+                    &rows(&fp.rotation),
+                );
             }
             let j = tip_jacobian(&model, &mut data, &c.q).unwrap().clone();
-            checker.check(&tag("jacobian"), &DMatrix::from_fn(6, model.nq(), |r, col| j[(r, col)]), &rows(&c.jacobian));
+            checker.check(
+                &tag("jacobian"),
+                &DMatrix::from_fn(6, model.nq(), |r, col| j[(r, col)]),
+                &rows(&c.jacobian),
+            );
             let jd = *tip_jdot_qdot(&model, &mut data, &c.q, &c.v).unwrap();
             checker.vec(&tag("jdot_qdot"), jd.as_slice(), &c.jdot_qdot);
             let w = Vector6::from_column_slice(&c.external_wrench);
-            let tw = rnea_with_tip_wrench(&model, &mut data, &c.q, &c.v, &c.a, &w).unwrap().clone();
-            checker.vec(&tag("rnea with tip wrench"), tw.as_slice(), &c.tau_with_wrench);
+            let tw = rnea_with_tip_wrench(&model, &mut data, &c.q, &c.v, &c.a, &w)
+                .unwrap()
+                .clone();
+            checker.vec(
+                &tag("rnea with tip wrench"),
+                tw.as_slice(),
+                &c.tau_with_wrench,
+            );
         }
     }
-    println!("{arms} arms, {cases} states, {} comparisons, worst relative error {:.2e}", checker.compared, checker.worst);
-    assert!(arms >= 21, "expected at least 20 random arms plus Baxter, found {arms}");
-    assert!(checker.failures.is_empty(), "{} disagreements:\n{}", checker.failures.len(), checker.failures[..checker.failures.len().min(8)].join("\n"));
+    println!(
+        "{arms} arms, {cases} states, {} comparisons, worst relative error {:.2e}",
+        checker.compared, checker.worst
+    );
+    assert!(
+        arms >= 21,
+        "expected at least 20 random arms plus Baxter, found {arms}"
+    );
+    assert!(
+        checker.failures.is_empty(),
+        "{} disagreements:\n{}",
+        checker.failures.len(),
+        checker.failures[..checker.failures.len().min(8)].join("\n")
+    );
 }

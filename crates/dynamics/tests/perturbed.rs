@@ -33,7 +33,9 @@ fn scaling_every_body_scales_every_torque() {
 fn a_point_payload_adds_its_weight_through_the_jacobian() {
     let nominal = common::baxter();
     let mass = 2.5;
-    let loaded = nominal.with_payload(&Payload::point_mass(mass, Vector3::zeros())).unwrap();
+    let loaded = nominal
+        .with_payload(&Payload::point_mass(mass, Vector3::zeros()))
+        .unwrap();
     let (mut d0, mut d1) = (Data::new(&nominal), Data::new(&loaded));
     let g0 = gravity_torque(&nominal, &mut d0, &Q).unwrap().clone();
     let g1 = gravity_torque(&loaded, &mut d1, &Q).unwrap().clone();
@@ -41,13 +43,24 @@ fn a_point_payload_adds_its_weight_through_the_jacobian() {
     // Holding the payload against gravity takes -J_v^T (m g) more torque.
     let weight = nominal.gravity * mass;
     let expected: DVector<f64> = -(j.fixed_rows::<3>(0).transpose() * weight);
-    assert!((&g1 - &g0 - &expected).norm() < 1e-10, "{} vs {}", &g1 - &g0, expected);
+    assert!(
+        (&g1 - &g0 - &expected).norm() < 1e-10,
+        "{} vs {}",
+        &g1 - &g0,
+        expected
+    );
     assert!((loaded.total_moving_mass() - nominal.total_moving_mass() - mass).abs() < 1e-12);
     // A payload with its own inertia, offset from the tip, keeps M symmetric positive definite.
-    let payload = Payload { mass: 1.0, com: Vector3::new(0.0, 0.0, 0.05), inertia: nalgebra::Matrix3::from_diagonal(&Vector3::new(2e-3, 2e-3, 1e-3)) };
+    let payload = Payload {
+        mass: 1.0,
+        com: Vector3::new(0.0, 0.0, 0.05),
+        inertia: nalgebra::Matrix3::from_diagonal(&Vector3::new(2e-3, 2e-3, 1e-3)),
+    };
     let tool = nominal.with_payload(&payload).unwrap();
     let mut d2 = Data::new(&tool);
     let m = crba(&tool, &mut d2, &Q).unwrap().clone();
     assert!(m.clone().symmetric_eigenvalues().min() > 0.0);
-    assert!(nominal.with_payload(&Payload::point_mass(-1.0, Vector3::zeros())).is_err());
+    assert!(nominal
+        .with_payload(&Payload::point_mass(-1.0, Vector3::zeros()))
+        .is_err());
 }

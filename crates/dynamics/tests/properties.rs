@@ -54,7 +54,11 @@ fn advance(q: &[f64], v: &[f64], h: f64) -> Vec<f64> {
 /// Rotation vector of a small rotation `r`: the axial part of `(R - R^T) / 2`, accurate
 /// to third order (an acos-based logarithm loses half the digits near the identity).
 fn log_so3(r: &Matrix3<f64>) -> Vector3<f64> {
-    Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]) * 0.5
+    Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    ) * 0.5
 }
 
 proptest! {
@@ -177,12 +181,16 @@ fn free_motion_conserves_energy() {
             kinetic_energy(model, data, q, v).unwrap() + potential_energy(model, data, q).unwrap()
         };
         let e0 = energy(&mut data, &q, &v);
-        let scale = kinetic_energy(model, &mut data, &q, &v).unwrap() + model.total_moving_mass() * 9.81 * 0.5;
+        let scale = kinetic_energy(model, &mut data, &q, &v).unwrap()
+            + model.total_moving_mass() * 9.81 * 0.5;
         let dt = 1e-4;
         let mut worst: f64 = 0.0;
         for _ in 0..10000 {
             let mut deriv = |q: &[f64], v: &[f64]| -> (Vec<f64>, Vec<f64>) {
-                let a = aba(model, &mut data, q, v, &tau).unwrap().as_slice().to_vec();
+                let a = aba(model, &mut data, q, v, &tau)
+                    .unwrap()
+                    .as_slice()
+                    .to_vec();
                 (v.to_vec(), a)
             };
             let (k1q, k1v) = deriv(&q, &v);
@@ -201,6 +209,10 @@ fn free_motion_conserves_energy() {
             }
             worst = worst.max((energy(&mut data, &q, &v) - e0).abs());
         }
-        assert!(worst < 1e-6 * scale, "{}: energy drift {worst} J (scale {scale} J)", model.source);
+        assert!(
+            worst < 1e-6 * scale,
+            "{}: energy drift {worst} J (scale {scale} J)",
+            model.source
+        );
     }
 }

@@ -13,10 +13,16 @@ fn bench_predict(c: &mut Criterion) {
     let j = 7;
     let rows = 5000;
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let x: Vec<f64> = (0..rows * 3 * j).map(|_| rng.random_range(-1.5..1.5)).collect();
+    let x: Vec<f64> = (0..rows * 3 * j)
+        .map(|_| rng.random_range(-1.5..1.5))
+        .collect();
     let y: Vec<f64> = x
         .chunks(3 * j)
-        .flat_map(|r| (0..j).map(move |i| (r[i] + 0.5 * r[j + i]).sin() + 0.3 * r[2 * j + i] + 0.2 * (r[j + i] / 0.02).tanh()))
+        .flat_map(|r| {
+            (0..j).map(move |i| {
+                (r[i] + 0.5 * r[j + i]).sin() + 0.3 * r[2 * j + i] + 0.2 * (r[j + i] / 0.02).tanh()
+            })
+        })
         .collect();
     let train = Dataset::new(&x, &y, 3 * j, j).unwrap();
     let mut cfg = BroadConfig::for_arm(j);
@@ -30,7 +36,9 @@ fn bench_predict(c: &mut Criterion) {
     c.bench_function("broad_predict_into_L1000_d21_n7", |b| {
         b.iter(|| {
             i = (i + 1) % inputs.len();
-            model.predict_into(black_box(inputs[i]), &mut out, &mut ws).unwrap();
+            model
+                .predict_into(black_box(inputs[i]), &mut out, &mut ws)
+                .unwrap();
             black_box(&out);
         })
     });

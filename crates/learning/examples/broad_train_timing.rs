@@ -34,7 +34,9 @@ fn make_data(rows: usize, start: usize, noise_seed: u64) -> (Vec<f64>, Vec<f64>)
     let amp: [f64; J] = [1.2, 0.9, 1.8, 1.0, 2.0, 1.1, 2.2];
     let centre: [f64; J] = [0.0, -0.5, 0.0, 1.2, 0.0, 0.3, 0.0];
     let omega: [f64; J] = [0.31, 0.23, 0.37, 0.29, 0.41, 0.19, 0.43];
-    let phase: Vec<f64> = (0..2 * J).map(|_| rng.random::<f64>() * std::f64::consts::TAU).collect();
+    let phase: Vec<f64> = (0..2 * J)
+        .map(|_| rng.random::<f64>() * std::f64::consts::TAU)
+        .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed);
     let mut x = vec![0.0; rows * 3 * J];
     let mut y = vec![0.0; rows * J];
@@ -85,38 +87,78 @@ fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse::<f64>().ok()))
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|v| v.parse::<f64>().ok())
+            })
         })
         .map(|kb| kb / 1024.0)
         .unwrap_or(f64::NAN)
 }
 
+/// User + system CPU seconds of this process so far (Linux /proc; NaN elsewhere).
+fn cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+            Some(ticks / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+    let num: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
     let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
     num / den
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let get = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
-    let rows: usize = get("--rows").map(|v| v.parse().expect("--rows")).unwrap_or(450_000);
-    let nodes: usize = get("--nodes").map(|v| v.parse().expect("--nodes")).unwrap_or(1000);
-    let grow: usize = get("--grow").map(|v| v.parse().expect("--grow")).unwrap_or(100);
-    let threads: usize = get("--threads").map(|v| v.parse().expect("--threads")).unwrap_or(0);
-    let block: usize = get("--block").map(|v| v.parse().expect("--block")).unwrap_or(2048);
+    let get = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let rows: usize = get("--rows")
+        .map(|v| v.parse().expect("--rows"))
+        .unwrap_or(450_000);
+    let nodes: usize = get("--nodes")
+        .map(|v| v.parse().expect("--nodes"))
+        .unwrap_or(1000);
+    let grow: usize = get("--grow")
+        .map(|v| v.parse().expect("--grow"))
+        .unwrap_or(100);
+    let threads: usize = get("--threads")
+        .map(|v| v.parse().expect("--threads"))
+        .unwrap_or(0);
+    let block: usize = get("--block")
+        .map(|v| v.parse().expect("--block"))
+        .unwrap_or(2048);
     let strategy = match get("--strategy").as_deref() {
         Some("shared") => GramStrategy::SharedGemm,
         _ => GramStrategy::PerThread,
     };
     let out_dir = get("--out");
     let skip_growth = args.iter().any(|a| a == "--skip-growth");
-    let repeat: usize = get("--repeat").map(|v| v.parse().expect("--repeat")).unwrap_or(2).max(1);
+    let repeat: usize = get("--repeat")
+        .map(|v| v.parse().expect("--repeat"))
+        .unwrap_or(2)
+        .max(1);
 
     // Fast exp versus libm exp, 10 M values.
-    let vals: Vec<f64> = (0..10_000_000).map(|i| -((i % 100_000) as f64) * 1e-4).collect();
+    let vals: Vec<f64> = (0..10_000_000)
+        .map(|i| -((i % 100_000) as f64) * 1e-4)
+        .collect();
     let mut v = vals.clone();
     let t = Instant::now();
     exp_nonpositive_slice(&mut v);
@@ -154,10 +196,13 @@ fn main() {
     let mut fixed_s = f64::INFINITY;
     let mut fixed_runs = Vec::new();
     let mut last = None;
+    let mut fixed_cpu = f64::INFINITY;
     for _ in 0..repeat {
         let t = Instant::now();
+        let c0 = cpu_s();
         let out = fit_with_nodes(&train, None, &fixed, model.nodes()).expect("fit fixed");
         let e = t.elapsed().as_secs_f64();
+        fixed_cpu = fixed_cpu.min(cpu_s() - c0);
         fixed_runs.push(e);
         fixed_s = fixed_s.min(e);
         last = Some(out);
@@ -173,16 +218,25 @@ fn main() {
     // 3. Growth by `grow` nodes versus a full retrain on the grown node set.
     let mut growth = serde_json::Value::Null;
     if !skip_growth && grow > 0 {
-        let spec = GrowthSpec::KMeansPlusPlus { count: grow, seed: 99 };
+        let spec = GrowthSpec::KMeansPlusPlus {
+            count: grow,
+            seed: 99,
+        };
         let (mut best_grow, mut best_retrain) = (f64::INFINITY, f64::INFINITY);
         let (mut grow_runs, mut retrain_runs) = (Vec::new(), Vec::new());
+        let (mut grow_cpu, mut retrain_cpu) = (Vec::new(), Vec::new());
         let mut result = None;
         for _ in 0..repeat {
             let mut grown = model.clone();
+            let c0 = cpu_s();
             let g = grown.grow(&train, &spec, &config).expect("grow");
+            let c1 = cpu_s();
             let t = Instant::now();
-            let (retrained, _) = fit_with_nodes(&train, None, &fixed, grown.nodes()).expect("retrain");
+            let (retrained, _) =
+                fit_with_nodes(&train, None, &fixed, grown.nodes()).expect("retrain");
             let retrain_s = t.elapsed().as_secs_f64();
+            grow_cpu.push(c1 - c0);
+            retrain_cpu.push(cpu_s() - c1);
             grow_runs.push(g.total_s);
             retrain_runs.push(retrain_s);
             best_grow = best_grow.min(g.total_s);
@@ -203,6 +257,8 @@ fn main() {
             "retrain_runs_s": retrain_runs,
             "grow_over_retrain": best_grow / best_retrain,
             "grow_over_full_fit": best_grow / report.times.total_s,
+            "grow_cpu_s": grow_cpu,
+            "retrain_cpu_s": retrain_cpu,
             "weights_rel_diff_vs_retrain": diff,
             "validation_nrmse_after_growth": e_grown,
         });
@@ -229,7 +285,11 @@ fn main() {
             "friction_columns": model.friction().columns, "friction_scales": model.friction().scales,
             "lambda": model2.lambda(), "rust_fixed_fit_s": fixed_s,
         });
-        std::fs::write(dir.join("meta.json"), serde_json::to_string_pretty(&meta).unwrap()).expect("meta");
+        std::fs::write(
+            dir.join("meta.json"),
+            serde_json::to_string_pretty(&meta).unwrap(),
+        )
+        .expect("meta");
     }
 
     let summary = serde_json::json!({
@@ -240,6 +300,7 @@ fn main() {
         "fit_report": report,
         "fixed_nodes_fit_s": fixed_s,
         "fixed_nodes_fit_runs_s": fixed_runs,
+        "fixed_nodes_fit_cpu_s": fixed_cpu,
         "fixed_nodes_times": report2.times,
         "features_pass_s": features_pass_s,
         "fixed_fit_weights_rel_diff": same_w,

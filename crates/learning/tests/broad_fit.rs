@@ -3,7 +3,8 @@
 mod broad_common;
 
 use admittance_learning::broad::{
-    fit, fit_with_nodes, BroadConfig, BroadError, Dataset, FrictionFeatures, GramStrategy, NodeSet, WidthRule,
+    fit, fit_with_nodes, BroadConfig, BroadError, Dataset, FrictionFeatures, GramStrategy, NodeSet,
+    WidthRule,
 };
 use broad_common::{data, rel_diff, small_config, target};
 use proptest::prelude::*;
@@ -97,14 +98,19 @@ fn weights_solve_the_ridge_normal_equations() {
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(30);
     cfg.lambda_grid = vec![1e-4];
-    cfg.friction = FrictionFeatures { columns: vec![1], scales: vec![0.1, 0.5] };
+    cfg.friction = FrictionFeatures {
+        columns: vec![1],
+        scales: vec![0.1, 0.5],
+    };
     let (model, _) = fit(&train, None, &cfg).unwrap();
     let p = model.pattern_width();
     assert_eq!(p, 3 + 2 + 1 + 30);
     let n = 700;
     let mut a = vec![0.0; n * p];
     for i in 0..n {
-        model.pattern_into(train.input_row(i), &mut a[i * p..(i + 1) * p]).unwrap();
+        model
+            .pattern_into(train.input_row(i), &mut a[i * p..(i + 1) * p])
+            .unwrap();
     }
     let w = model.weights();
     let bias = model.bias_index();
@@ -119,12 +125,19 @@ fn weights_solve_the_ridge_normal_equations() {
         let mut scale = 0.0f64;
         for j in 0..p {
             let atr: f64 = (0..n).map(|i| a[i * p + j] * r[i]).sum();
-            let reg = if j == bias { 0.0 } else { model.lambda() * w[j * 2 + o] };
+            let reg = if j == bias {
+                0.0
+            } else {
+                model.lambda() * w[j * 2 + o]
+            };
             worst = worst.max((atr - reg).abs());
             let aty: f64 = (0..n).map(|i| a[i * p + j] * y[i * 2 + o]).sum();
             scale = scale.max(aty.abs());
         }
-        assert!(worst < 1e-9 * scale, "normal equations residual {worst} (scale {scale})");
+        assert!(
+            worst < 1e-9 * scale,
+            "normal equations residual {worst} (scale {scale})"
+        );
         let mean_r = r.iter().sum::<f64>() / n as f64;
         assert!(mean_r.abs() < 1e-10, "mean residual {mean_r}");
     }
@@ -136,7 +149,10 @@ fn predict_into_matches_pattern_times_weights_and_batch() {
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(50);
     cfg.lambda_grid = vec![1e-6];
-    cfg.friction = FrictionFeatures { columns: vec![0, 2], scales: vec![0.05] };
+    cfg.friction = FrictionFeatures {
+        columns: vec![0, 2],
+        scales: vec![0.05],
+    };
     let (model, _) = fit(&train, None, &cfg).unwrap();
     let mut ws = model.workspace();
     let mut out = [0.0; 2];
@@ -149,14 +165,22 @@ fn predict_into_matches_pattern_times_weights_and_batch() {
         model.predict_into(xi, &mut out, &mut ws).unwrap();
         model.pattern_into(xi, &mut a).unwrap();
         for o in 0..2 {
-            let e: f64 = a.iter().enumerate().map(|(j, v)| v * model.weights()[j * 2 + o]).sum();
+            let e: f64 = a
+                .iter()
+                .enumerate()
+                .map(|(j, v)| v * model.weights()[j * 2 + o])
+                .sum();
             assert!((out[o] - e).abs() < 1e-10 * (1.0 + e.abs()));
             assert_eq!(out[o], batch[i * 2 + o]);
             abs_err += (out[o] - target(xi)[o]).abs();
         }
     }
     // And it approximates the function.
-    assert!(abs_err / 400.0 < 0.05, "mean absolute error {}", abs_err / 400.0);
+    assert!(
+        abs_err / 400.0 < 0.05,
+        "mean absolute error {}",
+        abs_err / 400.0
+    );
 }
 
 #[test]
@@ -165,7 +189,10 @@ fn predict_into_does_not_allocate() {
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(40);
     cfg.lambda_grid = vec![1e-6];
-    cfg.friction = FrictionFeatures { columns: vec![1], scales: vec![0.01, 0.1] };
+    cfg.friction = FrictionFeatures {
+        columns: vec![1],
+        scales: vec![0.01, 0.1],
+    };
     let (model, _) = fit(&train, None, &cfg).unwrap();
     let mut ws = model.workspace();
     let mut out = [0.0; 2];
@@ -173,7 +200,9 @@ fn predict_into_does_not_allocate() {
     COUNTING.with(|c| c.set(true));
     COUNT.with(|n| n.set(0));
     for i in 0..500 {
-        model.predict_into(&x[i * 3..i * 3 + 3], &mut out, &mut ws).unwrap();
+        model
+            .predict_into(&x[i * 3..i * 3 + 3], &mut out, &mut ws)
+            .unwrap();
     }
     COUNTING.with(|c| c.set(false));
     assert_eq!(COUNT.with(|n| n.get()), 0, "predict_into allocated");
@@ -199,9 +228,16 @@ fn blocking_and_threads_do_not_change_the_fit() {
         c.threads = threads;
         c.gram_strategy = strategy;
         let (m, _) = fit(&train, None, &c).unwrap();
-        assert_eq!(m.nodes(), reference.nodes(), "centres depend only on the seed");
+        assert_eq!(
+            m.nodes(),
+            reference.nodes(),
+            "centres depend only on the seed"
+        );
         let d = rel_diff(m.weights(), reference.weights());
-        assert!(d < 1e-9, "block {block} threads {threads} {strategy:?}: rel diff {d}");
+        assert!(
+            d < 1e-9,
+            "block {block} threads {threads} {strategy:?}: rel diff {d}"
+        );
     }
 }
 
@@ -221,7 +257,9 @@ fn centres_are_deterministic_and_seeded() {
     // Centres are data points (standardised): each lies on a training row.
     let s = a.standardiser();
     for cj in a.nodes().centres.chunks(3) {
-        let found = x.chunks(3).any(|r| (0..3).all(|k| ((r[k] - s.mean[k]) / s.std[k] - cj[k]).abs() < 1e-12));
+        let found = x
+            .chunks(3)
+            .any(|r| (0..3).all(|k| ((r[k] - s.mean[k]) / s.std[k] - cj[k]).abs() < 1e-12));
         assert!(found);
     }
     // Widths are positive and finite.
@@ -231,7 +269,12 @@ fn centres_are_deterministic_and_seeded() {
 #[test]
 fn width_rules_and_duplicate_points() {
     // Only 4 distinct input points but 12 nodes: duplicate centres, zero k-NN distances.
-    let pts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5], [1.0, 1.0, -1.0]];
+    let pts = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.5],
+        [1.0, 1.0, -1.0],
+    ];
     let mut x = Vec::new();
     let mut y = Vec::new();
     for i in 0..400 {
@@ -241,12 +284,20 @@ fn width_rules_and_duplicate_points() {
         y.extend_from_slice(&t);
     }
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
-    for rule in [WidthRule::Knn { k: 3, scale: 1.0 }, WidthRule::GlobalMedian { scale: 2.0 }, WidthRule::Fixed(0.7)] {
+    for rule in [
+        WidthRule::Knn { k: 3, scale: 1.0 },
+        WidthRule::GlobalMedian { scale: 2.0 },
+        WidthRule::Fixed(0.7),
+    ] {
         let mut cfg = small_config(12);
         cfg.widths = rule.clone();
         cfg.lambda_grid = vec![1e-6];
         let (m, _) = fit(&train, None, &cfg).unwrap();
-        assert!(m.nodes().widths.iter().all(|w| w.is_finite() && *w > 0.0), "{rule:?}: {:?}", m.nodes().widths);
+        assert!(
+            m.nodes().widths.iter().all(|w| w.is_finite() && *w > 0.0),
+            "{rule:?}: {:?}",
+            m.nodes().widths
+        );
         if let WidthRule::Fixed(w) = rule {
             assert!(m.nodes().widths.iter().all(|&v| v == w));
         }
@@ -268,7 +319,8 @@ fn constant_input_column_is_guarded() {
     assert_eq!(m.standardiser().std[2], 1.0);
     assert_eq!(m.standardiser().mean[2], 4.25);
     let mut out = [0.0; 2];
-    m.predict_into(&[0.1, 0.2, 4.25], &mut out, &mut m.workspace()).unwrap();
+    m.predict_into(&[0.1, 0.2, 4.25], &mut out, &mut m.workspace())
+        .unwrap();
     assert!(out.iter().all(|v| v.is_finite()));
 }
 
@@ -290,11 +342,17 @@ fn friction_features_capture_the_coulomb_step() {
     let mut cfg = small_config(40);
     cfg.lambda_grid = vec![1e-8];
     let (plain, _) = fit(&train, None, &cfg).unwrap();
-    cfg.friction = FrictionFeatures { columns: vec![1], scales: vec![0.01, 0.05, 0.2] };
+    cfg.friction = FrictionFeatures {
+        columns: vec![1],
+        scales: vec![0.01, 0.05, 0.2],
+    };
     let (with, _) = fit(&train, None, &cfg).unwrap();
     let e_plain = plain.evaluate(&train, 1).unwrap()[0];
     let e_with = with.evaluate(&train, 1).unwrap()[0];
-    assert!(e_with < 0.3 * e_plain, "with friction features {e_with}, without {e_plain}");
+    assert!(
+        e_with < 0.3 * e_plain,
+        "with friction features {e_with}, without {e_plain}"
+    );
     assert!(e_with < 0.01, "{e_with}");
     assert_eq!(with.pattern_width(), 2 + 3 + 1 + 40);
 }
@@ -309,7 +367,11 @@ fn fit_with_nodes_reproduces_fit() {
     let (b, _) = fit_with_nodes(&train, None, &cfg, a.nodes()).unwrap();
     assert_eq!(a.weights(), b.weights());
     // Zero nodes: a linear model with bias.
-    let empty = NodeSet { dim: 3, centres: vec![], widths: vec![] };
+    let empty = NodeSet {
+        dim: 3,
+        centres: vec![],
+        widths: vec![],
+    };
     let (lin, _) = fit_with_nodes(&train, None, &cfg, &empty).unwrap();
     assert_eq!(lin.pattern_width(), 4);
 }
@@ -318,16 +380,33 @@ fn fit_with_nodes_reproduces_fit() {
 fn bad_inputs_are_errors_not_panics() {
     let (x, y) = data(100, 13, 0.01);
     // Shapes.
-    assert!(matches!(Dataset::new(&x, &y, 0, 2), Err(BroadError::Dimension { .. })));
-    assert!(matches!(Dataset::new(&x, &y, 3, 0), Err(BroadError::Dimension { .. })));
-    assert!(matches!(Dataset::new(&x[..298], &y, 3, 2), Err(BroadError::Dimension { .. })));
-    assert!(matches!(Dataset::new(&x, &y[..198], 3, 2), Err(BroadError::Dimension { .. })));
-    assert!(matches!(Dataset::new(&[], &[], 3, 2), Err(BroadError::Empty { .. })));
+    assert!(matches!(
+        Dataset::new(&x, &y, 0, 2),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        Dataset::new(&x, &y, 3, 0),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        Dataset::new(&x[..298], &y, 3, 2),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        Dataset::new(&x, &y[..198], 3, 2),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        Dataset::new(&[], &[], 3, 2),
+        Err(BroadError::Empty { .. })
+    ));
     // NaN names the row and column.
     let mut bad = x.clone();
     bad[3 * 57 + 2] = f64::NAN;
     match Dataset::new(&bad, &y, 3, 2) {
-        Err(BroadError::NonFinite { row, column, what, .. }) => {
+        Err(BroadError::NonFinite {
+            row, column, what, ..
+        }) => {
             assert_eq!((row, column, what), (57, 2, "inputs"));
         }
         other => panic!("{other:?}"),
@@ -339,48 +418,108 @@ fn bad_inputs_are_errors_not_panics() {
     // Configuration.
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(10);
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::NeedValidation(4))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::NeedValidation(4))
+    ));
     cfg.lambda_grid = vec![-1.0];
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.lambda_grid = vec![];
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.lambda_grid = vec![1e-6];
-    cfg.friction = FrictionFeatures { columns: vec![3], scales: vec![0.1] };
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
-    cfg.friction = FrictionFeatures { columns: vec![1], scales: vec![0.0] };
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    cfg.friction = FrictionFeatures {
+        columns: vec![3],
+        scales: vec![0.1],
+    };
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
+    cfg.friction = FrictionFeatures {
+        columns: vec![1],
+        scales: vec![0.0],
+    };
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.friction = FrictionFeatures::none();
     cfg.block_rows = 0;
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.block_rows = 64;
     cfg.widths = WidthRule::Knn { k: 0, scale: 1.0 };
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.widths = WidthRule::Fixed(f64::NAN);
-    assert!(matches!(fit(&train, None, &cfg), Err(BroadError::Config(_))));
+    assert!(matches!(
+        fit(&train, None, &cfg),
+        Err(BroadError::Config(_))
+    ));
     cfg.widths = WidthRule::Fixed(1.0);
     // Validation set of other widths.
     let (xv, yv) = data(10, 14, 0.01);
     let val = Dataset::new(&xv[..20], &yv[..10], 2, 1).unwrap();
-    assert!(matches!(fit(&train, Some(&val), &cfg), Err(BroadError::Dimension { .. })));
+    assert!(matches!(
+        fit(&train, Some(&val), &cfg),
+        Err(BroadError::Dimension { .. })
+    ));
     // Nodes of the wrong width.
-    let nodes = NodeSet { dim: 2, centres: vec![0.0; 4], widths: vec![1.0, 1.0] };
-    assert!(matches!(fit_with_nodes(&train, None, &cfg, &nodes), Err(BroadError::Dimension { .. })));
-    let nodes = NodeSet { dim: 3, centres: vec![0.0; 6], widths: vec![1.0, -1.0] };
-    assert!(matches!(fit_with_nodes(&train, None, &cfg, &nodes), Err(BroadError::Config(_))));
+    let nodes = NodeSet {
+        dim: 2,
+        centres: vec![0.0; 4],
+        widths: vec![1.0, 1.0],
+    };
+    assert!(matches!(
+        fit_with_nodes(&train, None, &cfg, &nodes),
+        Err(BroadError::Dimension { .. })
+    ));
+    let nodes = NodeSet {
+        dim: 3,
+        centres: vec![0.0; 6],
+        widths: vec![1.0, -1.0],
+    };
+    assert!(matches!(
+        fit_with_nodes(&train, None, &cfg, &nodes),
+        Err(BroadError::Config(_))
+    ));
     // Prediction.
     let (m, _) = fit(&train, None, &cfg).unwrap();
     let mut ws = m.workspace();
     let mut out = [0.0; 2];
-    assert!(matches!(m.predict_into(&[0.0; 2], &mut out, &mut ws), Err(BroadError::Dimension { .. })));
-    assert!(matches!(m.predict_into(&[0.0; 3], &mut [0.0; 3], &mut ws), Err(BroadError::Dimension { .. })));
+    assert!(matches!(
+        m.predict_into(&[0.0; 2], &mut out, &mut ws),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        m.predict_into(&[0.0; 3], &mut [0.0; 3], &mut ws),
+        Err(BroadError::Dimension { .. })
+    ));
     assert!(matches!(
         m.predict_into(&[0.0, f64::NAN, 0.0], &mut out, &mut ws),
         Err(BroadError::NonFinite { column: 1, .. })
     ));
     // A fresh default workspace works (grown once).
-    m.predict_into(&[0.0; 3], &mut out, &mut Default::default()).unwrap();
-    assert!(matches!(m.predict_batch(&[0.0; 4], &mut [0.0; 2]), Err(BroadError::Dimension { .. })));
-    assert!(matches!(m.evaluate(&val, 1), Err(BroadError::Dimension { .. })));
+    m.predict_into(&[0.0; 3], &mut out, &mut Default::default())
+        .unwrap();
+    assert!(matches!(
+        m.predict_batch(&[0.0; 4], &mut [0.0; 2]),
+        Err(BroadError::Dimension { .. })
+    ));
+    assert!(matches!(
+        m.evaluate(&val, 1),
+        Err(BroadError::Dimension { .. })
+    ));
 }
 
 #[test]
@@ -394,8 +533,12 @@ fn singular_systems_report_not_positive_definite_or_survive() {
     cfg.lambda_grid = vec![1e-3];
     let (m, _) = fit(&train, None, &cfg).unwrap();
     let mut out = [0.0; 2];
-    m.predict_into(&[0.5; 3], &mut out, &mut m.workspace()).unwrap();
-    assert!((out[0] - 1.0).abs() < 1e-6 && (out[1] - 1.0).abs() < 1e-6, "{out:?}");
+    m.predict_into(&[0.5; 3], &mut out, &mut m.workspace())
+        .unwrap();
+    assert!(
+        (out[0] - 1.0).abs() < 1e-6 && (out[1] - 1.0).abs() < 1e-6,
+        "{out:?}"
+    );
 }
 
 #[test]

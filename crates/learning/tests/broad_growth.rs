@@ -4,7 +4,8 @@
 mod broad_common;
 
 use admittance_learning::broad::{
-    fit, fit_with_nodes, greville_add_columns, pseudo_inverse, BroadError, Dataset, GrowthSpec, NodeSet,
+    fit, fit_with_nodes, greville_add_columns, pseudo_inverse, BroadError, Dataset, GrowthSpec,
+    NodeSet,
 };
 use broad_common::{data, rel_diff, small_config};
 use faer::linalg::matmul::matmul;
@@ -26,7 +27,9 @@ fn ridge_growth_equals_full_retrain_explicit_nodes() {
         centres: (0..15 * 3).map(|_| rng.random_range(-1.7..1.7)).collect(),
         widths: (0..15).map(|_| rng.random_range(0.5..1.5)).collect(),
     };
-    let report = model.grow(&train, &GrowthSpec::Nodes(extra.clone()), &cfg).unwrap();
+    let report = model
+        .grow(&train, &GrowthSpec::Nodes(extra.clone()), &cfg)
+        .unwrap();
     assert_eq!(report.nodes_added, 15);
     assert_eq!(report.nodes, 55);
     assert_eq!(model.n_nodes(), 55);
@@ -55,11 +58,27 @@ fn repeated_kmeanspp_growth_equals_full_retrain() {
     cfg.lambda_grid = vec![1e-8, 1e-6, 1e-4];
     let (mut model, report) = fit(&train, Some(&val), &cfg).unwrap();
     let before = model.evaluate(&val, 1).unwrap();
-    model.grow(&train, &GrowthSpec::KMeansPlusPlus { count: 10, seed: 1 }, &cfg).unwrap();
-    model.grow(&train, &GrowthSpec::KMeansPlusPlus { count: 7, seed: 2 }, &cfg).unwrap();
+    model
+        .grow(
+            &train,
+            &GrowthSpec::KMeansPlusPlus { count: 10, seed: 1 },
+            &cfg,
+        )
+        .unwrap();
+    model
+        .grow(
+            &train,
+            &GrowthSpec::KMeansPlusPlus { count: 7, seed: 2 },
+            &cfg,
+        )
+        .unwrap();
     assert_eq!(model.n_nodes(), 37);
     // Old nodes unchanged, new widths positive.
-    assert!(model.nodes().widths.iter().all(|w| w.is_finite() && *w > 0.0));
+    assert!(model
+        .nodes()
+        .widths
+        .iter()
+        .all(|w| w.is_finite() && *w > 0.0));
     let mut fixed = cfg.clone();
     fixed.lambda_grid = vec![report.lambda_rel];
     let (retrained, _) = fit_with_nodes(&train, None, &fixed, model.nodes()).unwrap();
@@ -67,10 +86,19 @@ fn repeated_kmeanspp_growth_equals_full_retrain() {
     assert!(d < 1e-8, "growth vs retrain rel diff {d}");
     let after = model.evaluate(&val, 1).unwrap();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    assert!(mean(&after) < mean(&before), "growth should help an under-sized network: {before:?} -> {after:?}");
+    assert!(
+        mean(&after) < mean(&before),
+        "growth should help an under-sized network: {before:?} -> {after:?}"
+    );
     // Zero nodes: nothing changes.
     let w = model.weights().to_vec();
-    let r = model.grow(&train, &GrowthSpec::KMeansPlusPlus { count: 0, seed: 3 }, &cfg).unwrap();
+    let r = model
+        .grow(
+            &train,
+            &GrowthSpec::KMeansPlusPlus { count: 0, seed: 3 },
+            &cfg,
+        )
+        .unwrap();
     assert_eq!(r.nodes_added, 0);
     assert_eq!(model.weights(), &w[..]);
 }
@@ -101,26 +129,51 @@ fn growth_refuses_other_data_and_missing_state() {
     // Other rows, same count.
     let (x2, y2) = data(1000, 36, 0.02);
     let other = Dataset::new(&x2, &y2, 3, 2).unwrap();
-    assert!(matches!(model.grow(&other, &spec, &cfg), Err(BroadError::GrowthDataMismatch(_))));
+    assert!(matches!(
+        model.grow(&other, &spec, &cfg),
+        Err(BroadError::GrowthDataMismatch(_))
+    ));
     // Same inputs, other targets.
     let y3: Vec<f64> = y.iter().map(|v| v + 0.1).collect();
     let other = Dataset::new(&x, &y3, 3, 2).unwrap();
-    assert!(matches!(model.grow(&other, &spec, &cfg), Err(BroadError::GrowthDataMismatch(_))));
+    assert!(matches!(
+        model.grow(&other, &spec, &cfg),
+        Err(BroadError::GrowthDataMismatch(_))
+    ));
     // Fewer rows.
     let fewer = Dataset::new(&x[..1500], &y[..1000], 3, 2).unwrap();
-    assert!(matches!(model.grow(&fewer, &spec, &cfg), Err(BroadError::GrowthDataMismatch(_))));
+    assert!(matches!(
+        model.grow(&fewer, &spec, &cfg),
+        Err(BroadError::GrowthDataMismatch(_))
+    ));
     // Wrong widths.
     let narrow = Dataset::new(&x[..2000], &y[..1000], 2, 1).unwrap();
-    assert!(matches!(model.grow(&narrow, &spec, &cfg), Err(BroadError::Dimension { .. })));
+    assert!(matches!(
+        model.grow(&narrow, &spec, &cfg),
+        Err(BroadError::Dimension { .. })
+    ));
     // Explicit nodes of another dimension.
-    let bad = NodeSet { dim: 2, centres: vec![0.0; 2], widths: vec![1.0] };
-    assert!(matches!(model.grow(&train, &GrowthSpec::Nodes(bad), &cfg), Err(BroadError::Dimension { .. })));
+    let bad = NodeSet {
+        dim: 2,
+        centres: vec![0.0; 2],
+        widths: vec![1.0],
+    };
+    assert!(matches!(
+        model.grow(&train, &GrowthSpec::Nodes(bad), &cfg),
+        Err(BroadError::Dimension { .. })
+    ));
     // Nothing changed by the failed attempts.
     assert_eq!(model.n_nodes(), 10);
     model.strip_growth_state();
     assert!(!model.has_growth_state());
-    assert!(matches!(model.grow(&train, &spec, &cfg), Err(BroadError::NoGrowthState)));
-    assert!(matches!(model.set_lambda(1e-3), Err(BroadError::NoGrowthState)));
+    assert!(matches!(
+        model.grow(&train, &spec, &cfg),
+        Err(BroadError::NoGrowthState)
+    ));
+    assert!(matches!(
+        model.set_lambda(1e-3),
+        Err(BroadError::NoGrowthState)
+    ));
 }
 
 fn random_mat(rows: usize, cols: usize, rng: &mut ChaCha8Rng) -> Mat<f64> {
@@ -157,7 +210,15 @@ fn greville_equals_pinv_retrain_full_rank() {
     let y = random_mat(n, dout, &mut rng);
     let a_pinv = pseudo_inverse(a.as_ref(), 1e-12).unwrap();
     let w = pinv_times(a_pinv.as_ref(), y.as_ref());
-    let grown = greville_add_columns(a.as_ref(), a_pinv.as_ref(), w.as_ref(), y.as_ref(), new_cols.as_ref(), 1e-10).unwrap();
+    let grown = greville_add_columns(
+        a.as_ref(),
+        a_pinv.as_ref(),
+        w.as_ref(),
+        y.as_ref(),
+        new_cols.as_ref(),
+        1e-10,
+    )
+    .unwrap();
     assert_eq!((grown.a.nrows(), grown.a.ncols()), (n, p + k));
     let mut ap = Mat::<f64>::zeros(n, p + k);
     ap.as_mut().submatrix_mut(0, 0, n, p).copy_from(&a);
@@ -171,11 +232,32 @@ fn greville_equals_pinv_retrain_full_rank() {
     assert!(d_w < 1e-10, "W rel diff {d_w}");
     // Least squares by the normal equations (full column rank): A^T A W = A^T Y.
     let mut ata = Mat::<f64>::zeros(p + k, p + k);
-    matmul(ata.as_mut(), Accum::Replace, ap.transpose(), ap.as_ref(), 1.0, Par::Seq);
+    matmul(
+        ata.as_mut(),
+        Accum::Replace,
+        ap.transpose(),
+        ap.as_ref(),
+        1.0,
+        Par::Seq,
+    );
     let mut aty = Mat::<f64>::zeros(p + k, dout);
-    matmul(aty.as_mut(), Accum::Replace, ap.transpose(), y.as_ref(), 1.0, Par::Seq);
+    matmul(
+        aty.as_mut(),
+        Accum::Replace,
+        ap.transpose(),
+        y.as_ref(),
+        1.0,
+        Par::Seq,
+    );
     let mut lhs = Mat::<f64>::zeros(p + k, dout);
-    matmul(lhs.as_mut(), Accum::Replace, ata.as_ref(), grown.w.as_ref(), 1.0, Par::Seq);
+    matmul(
+        lhs.as_mut(),
+        Accum::Replace,
+        ata.as_ref(),
+        grown.w.as_ref(),
+        1.0,
+        Par::Seq,
+    );
     assert!(mat_rel_diff(lhs.as_ref(), aty.as_ref()) < 1e-10);
 }
 
@@ -189,14 +271,32 @@ fn greville_dependent_column_branch() {
     let y = random_mat(n, dout, &mut rng);
     let coef = random_mat(p, 1, &mut rng);
     let mut dep = Mat::<f64>::zeros(n, 1);
-    matmul(dep.as_mut(), Accum::Replace, a.as_ref(), coef.as_ref(), 1.0, Par::Seq);
+    matmul(
+        dep.as_mut(),
+        Accum::Replace,
+        a.as_ref(),
+        coef.as_ref(),
+        1.0,
+        Par::Seq,
+    );
     let indep = random_mat(n, 1, &mut rng);
     let mut new_cols = Mat::<f64>::zeros(n, 2);
     new_cols.as_mut().submatrix_mut(0, 0, n, 1).copy_from(&dep);
-    new_cols.as_mut().submatrix_mut(0, 1, n, 1).copy_from(&indep);
+    new_cols
+        .as_mut()
+        .submatrix_mut(0, 1, n, 1)
+        .copy_from(&indep);
     let a_pinv = pseudo_inverse(a.as_ref(), 1e-12).unwrap();
     let w = pinv_times(a_pinv.as_ref(), y.as_ref());
-    let grown = greville_add_columns(a.as_ref(), a_pinv.as_ref(), w.as_ref(), y.as_ref(), new_cols.as_ref(), 1e-9).unwrap();
+    let grown = greville_add_columns(
+        a.as_ref(),
+        a_pinv.as_ref(),
+        w.as_ref(),
+        y.as_ref(),
+        new_cols.as_ref(),
+        1e-9,
+    )
+    .unwrap();
     let ap_pinv = pseudo_inverse(grown.a.as_ref(), 1e-10).unwrap();
     let d_pinv = mat_rel_diff(grown.a_pinv.as_ref(), ap_pinv.as_ref());
     assert!(d_pinv < 1e-8, "A^+ rel diff {d_pinv}");
@@ -214,7 +314,13 @@ fn greville_on_network_pattern_columns() {
     cfg.lambda_grid = vec![1e-6];
     let (model, _) = fit(&train, None, &cfg).unwrap();
     let mut grown = model.clone();
-    grown.grow(&train, &GrowthSpec::KMeansPlusPlus { count: 4, seed: 9 }, &cfg).unwrap();
+    grown
+        .grow(
+            &train,
+            &GrowthSpec::KMeansPlusPlus { count: 4, seed: 9 },
+            &cfg,
+        )
+        .unwrap();
     let (n, p, pg) = (300, model.pattern_width(), grown.pattern_width());
     let mut full = Mat::<f64>::zeros(n, pg);
     let mut row = vec![0.0; pg];
@@ -228,7 +334,15 @@ fn greville_on_network_pattern_columns() {
     let a = full.as_ref().subcols(0, p);
     let a_pinv = pseudo_inverse(a, 1e-12).unwrap();
     let w = pinv_times(a_pinv.as_ref(), ym);
-    let g = greville_add_columns(a, a_pinv.as_ref(), w.as_ref(), ym, full.as_ref().subcols(p, pg - p), 1e-10).unwrap();
+    let g = greville_add_columns(
+        a,
+        a_pinv.as_ref(),
+        w.as_ref(),
+        ym,
+        full.as_ref().subcols(p, pg - p),
+        1e-10,
+    )
+    .unwrap();
     let w_ref = pinv_times(pseudo_inverse(full.as_ref(), 1e-12).unwrap().as_ref(), ym);
     let d = mat_rel_diff(g.w.as_ref(), w_ref.as_ref());
     assert!(d < 1e-6, "W rel diff {d}");
@@ -242,18 +356,49 @@ fn greville_rejects_bad_shapes() {
     let y = Mat::<f64>::zeros(5, 1);
     let cols = Mat::<f64>::zeros(4, 1);
     assert!(matches!(
-        greville_add_columns(a.as_ref(), pinv.as_ref(), w.as_ref(), y.as_ref(), cols.as_ref(), 1e-10),
+        greville_add_columns(
+            a.as_ref(),
+            pinv.as_ref(),
+            w.as_ref(),
+            y.as_ref(),
+            cols.as_ref(),
+            1e-10
+        ),
         Err(BroadError::Greville(_))
     ));
     let bad_pinv = Mat::<f64>::zeros(5, 2);
     let cols = Mat::<f64>::zeros(5, 1);
-    assert!(greville_add_columns(a.as_ref(), bad_pinv.as_ref(), w.as_ref(), y.as_ref(), cols.as_ref(), 1e-10).is_err());
-    assert!(greville_add_columns(a.as_ref(), pinv.as_ref(), w.as_ref(), y.as_ref(), cols.as_ref(), f64::NAN).is_err());
+    assert!(greville_add_columns(
+        a.as_ref(),
+        bad_pinv.as_ref(),
+        w.as_ref(),
+        y.as_ref(),
+        cols.as_ref(),
+        1e-10
+    )
+    .is_err());
+    assert!(greville_add_columns(
+        a.as_ref(),
+        pinv.as_ref(),
+        w.as_ref(),
+        y.as_ref(),
+        cols.as_ref(),
+        f64::NAN
+    )
+    .is_err());
     let mut nan = Mat::<f64>::zeros(3, 3);
     nan[(1, 1)] = f64::NAN;
     assert!(pseudo_inverse(nan.as_ref(), 1e-12).is_err());
     let mut nan_cols = Mat::<f64>::zeros(5, 1);
     nan_cols[(4, 0)] = f64::INFINITY;
-    let err = greville_add_columns(a.as_ref(), pinv.as_ref(), w.as_ref(), y.as_ref(), nan_cols.as_ref(), 1e-10).unwrap_err();
+    let err = greville_add_columns(
+        a.as_ref(),
+        pinv.as_ref(),
+        w.as_ref(),
+        y.as_ref(),
+        nan_cols.as_ref(),
+        1e-10,
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("new columns"), "{err}");
 }

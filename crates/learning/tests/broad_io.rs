@@ -3,7 +3,9 @@
 
 mod broad_common;
 
-use admittance_learning::broad::{fit, fnv1a64, BroadError, BroadModel, Dataset, FrictionFeatures, GrowthSpec, FORMAT_NAME};
+use admittance_learning::broad::{
+    fit, fnv1a64, BroadError, BroadModel, Dataset, FrictionFeatures, GrowthSpec, FORMAT_NAME,
+};
 use broad_common::{data, small_config};
 use std::path::{Path, PathBuf};
 
@@ -19,7 +21,10 @@ fn model() -> (BroadModel, Vec<f64>, Vec<f64>) {
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(25);
     cfg.lambda_grid = vec![1e-6];
-    cfg.friction = FrictionFeatures { columns: vec![1], scales: vec![0.02, 0.3] };
+    cfg.friction = FrictionFeatures {
+        columns: vec![1],
+        scales: vec![0.02, 0.3],
+    };
     (fit(&train, None, &cfg).unwrap().0, x, y)
 }
 
@@ -60,7 +65,10 @@ fn save_load_round_trip_is_exact_and_keeps_growth_state() {
     // Overwrite in place with the grown model; no temporary files remain.
     g1.save(&path).unwrap();
     assert_eq!(BroadModel::load(&path).unwrap().n_nodes(), 30);
-    let names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
     assert_eq!(names, vec![std::ffi::OsString::from("observer.brbf")]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -89,7 +97,10 @@ fn file_header_names_format_and_version() {
     assert_eq!(header["d_in"], 3);
     assert_eq!(header["nodes"], 25);
     let n = bytes.len();
-    assert_eq!(u64::from_le_bytes(bytes[n - 8..].try_into().unwrap()), fnv1a64(&bytes[..n - 8]));
+    assert_eq!(
+        u64::from_le_bytes(bytes[n - 8..].try_into().unwrap()),
+        fnv1a64(&bytes[..n - 8])
+    );
 }
 
 fn expect_format_error(r: Result<BroadModel, BroadError>, path: &Path, needle: &str) {
@@ -128,7 +139,17 @@ fn truncated_files_are_errors() {
     let (m, _, _) = model();
     let bytes = m.to_bytes();
     let p = Path::new("/models/truncated.brbf");
-    for len in [0, 3, 8, 12, 16, 40, bytes.len() / 2, bytes.len() - 9, bytes.len() - 1] {
+    for len in [
+        0,
+        3,
+        8,
+        12,
+        16,
+        40,
+        bytes.len() / 2,
+        bytes.len() - 9,
+        bytes.len() - 1,
+    ] {
         expect_format_error(BroadModel::from_bytes(&bytes[..len], p), p, "truncated");
     }
     let mut longer = bytes.clone();
@@ -147,12 +168,21 @@ fn wrong_version_format_or_magic() {
     let replace = |from: &str, to: &str| -> Vec<u8> {
         assert_eq!(from.len(), to.len());
         let mut b = bytes.clone();
-        let pos = b.windows(from.len()).position(|w| w == from.as_bytes()).unwrap();
+        let pos = b
+            .windows(from.len())
+            .position(|w| w == from.as_bytes())
+            .unwrap();
         b[pos..pos + to.len()].copy_from_slice(to.as_bytes());
         b
     };
     match BroadModel::from_bytes(&replace("\"format_version\":1", "\"format_version\":7"), p) {
-        Err(e @ BroadError::UnsupportedVersion { found: 7, supported: 1, .. }) => {
+        Err(
+            e @ BroadError::UnsupportedVersion {
+                found: 7,
+                supported: 1,
+                ..
+            },
+        ) => {
             assert!(e.to_string().contains("future.brbf"));
         }
         other => panic!("{other:?}"),
@@ -198,7 +228,10 @@ fn random_byte_flips_never_panic() {
         for mask in [0x01u8, 0x80] {
             let mut b = bytes.clone();
             b[pos] ^= mask;
-            assert!(BroadModel::from_bytes(&b, p).is_err(), "flip at {pos} loaded");
+            assert!(
+                BroadModel::from_bytes(&b, p).is_err(),
+                "flip at {pos} loaded"
+            );
         }
     }
 }

@@ -10,6 +10,8 @@
 //!   both with implicit friction.
 //! * [`sensors`]: encoder quantisation and noise, filtered differentiation, fault
 //!   injection.
+//! * [`free_motion`]: the free-motion data format (METHOD.md section 5) and its validating
+//!   loader.
 //!
 //! ```
 //! use admittance_dynamics::Model;
@@ -28,6 +30,7 @@
 //! ```
 
 pub mod environment;
+pub mod free_motion;
 pub mod integrator;
 pub mod plant;
 pub mod scenario;
@@ -37,6 +40,7 @@ pub use environment::{
     Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
     TipForceProfileConfig, WallConfig,
 };
+pub use free_motion::{FreeMotionData, FreeMotionError};
 pub use integrator::Integrator;
 pub use plant::actuator::{clamp_effort, Deadzone};
 pub use plant::config::{

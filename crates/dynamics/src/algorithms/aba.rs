@@ -10,7 +10,13 @@ use crate::model::{JointKind, Model};
 use crate::spatial::{transform_articulated_inertia, Force, Motion};
 
 /// Joint accelerations for torques `tau`, into `data.qddot`.
-pub fn aba<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], tau: &[f64]) -> Result<&'d DVector<f64>, DimensionError> {
+pub fn aba<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+) -> Result<&'d DVector<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
@@ -38,7 +44,11 @@ pub fn aba_with_tip_wrench<'d>(
 }
 
 #[inline(always)]
-fn subspace_column(kind: JointKind, axis: &Vector3<f64>, ia: &nalgebra::Matrix6<f64>) -> Vector6<f64> {
+fn subspace_column(
+    kind: JointKind,
+    axis: &Vector3<f64>,
+    ia: &nalgebra::Matrix6<f64>,
+) -> Vector6<f64> {
     match kind {
         JointKind::Prismatic => ia.fixed_columns::<3>(0) * axis,
         _ => ia.fixed_columns::<3>(3) * axis,
@@ -46,7 +56,14 @@ fn subspace_column(kind: JointKind, axis: &Vector3<f64>, ia: &nalgebra::Matrix6<
 }
 
 #[inline(always)]
-fn aba_pass(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], wrench: Option<&Vector6<f64>>) {
+fn aba_pass(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    wrench: Option<&Vector6<f64>>,
+) {
     let n = model.nq();
     update_joint_placements(model, data, q);
     let mut v_parent = Motion::zero();
@@ -86,7 +103,10 @@ fn aba_pass(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], w
             let reduced = ia - u_col * u_col.transpose() * d_inv;
             let c = data.bias_acc[i].to_vector();
             let pa = data.art_bias[i].to_vector() + reduced * c + u_col * (u * d_inv);
-            let pa = Force { linear: pa.fixed_rows::<3>(0).into_owned(), angular: pa.fixed_rows::<3>(3).into_owned() };
+            let pa = Force {
+                linear: pa.fixed_rows::<3>(0).into_owned(),
+                angular: pa.fixed_rows::<3>(3).into_owned(),
+            };
             let x = data.joint_placements[i];
             let moved = transform_articulated_inertia(&x, &reduced);
             data.art_inertia[i - 1] += moved;
@@ -94,12 +114,16 @@ fn aba_pass(model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &[f64], w
             data.art_bias[i - 1] += moved_bias;
         }
     }
-    let mut a_parent = Motion { linear: -model.gravity, angular: Vector3::zeros() };
+    let mut a_parent = Motion {
+        linear: -model.gravity,
+        angular: Vector3::zeros(),
+    };
     for i in 0..n {
         let joint = &model.joints[i];
         let ai = data.joint_placements[i].act_inv_motion(&a_parent) + data.bias_acc[i];
         let u_col = &data.art_u[i];
-        let ua = u_col.fixed_rows::<3>(0).dot(&ai.linear) + u_col.fixed_rows::<3>(3).dot(&ai.angular);
+        let ua =
+            u_col.fixed_rows::<3>(0).dot(&ai.linear) + u_col.fixed_rows::<3>(3).dot(&ai.angular);
         let qdd = (data.art_torque[i] - ua) / data.art_d[i];
         data.qddot[i] = qdd;
         let ai = ai + joint.motion_subspace().scaled(qdd);

@@ -18,7 +18,10 @@ use crate::spatial::{add_force_cross_matrix, skew, Force, Inertia, Motion};
 
 #[inline(always)]
 fn motion_of(v: &Vector6<f64>) -> Motion {
-    Motion { linear: v.fixed_rows::<3>(0).into_owned(), angular: v.fixed_rows::<3>(3).into_owned() }
+    Motion {
+        linear: v.fixed_rows::<3>(0).into_owned(),
+        angular: v.fixed_rows::<3>(3).into_owned(),
+    }
 }
 
 /// `B = 1/2 (v x* Y - Y v x) + 1/2 (Y v) x-bar` for a body of world inertia `Y`.
@@ -35,18 +38,30 @@ fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
     let p10: Matrix3<f64> = hw;
     let p11: Matrix3<f64> = h * vl + y.rotational * w;
     let mut b = Matrix6::zeros();
-    b.fixed_view_mut::<3, 3>(0, 0).copy_from(&((p00 + p00.transpose()) * -0.5));
-    b.fixed_view_mut::<3, 3>(0, 3).copy_from(&((p01 + p10.transpose()) * -0.5));
-    b.fixed_view_mut::<3, 3>(3, 0).copy_from(&((p10 + p01.transpose()) * -0.5));
-    b.fixed_view_mut::<3, 3>(3, 3).copy_from(&((p11 + p11.transpose()) * -0.5));
+    b.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&((p00 + p00.transpose()) * -0.5));
+    b.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&((p01 + p10.transpose()) * -0.5));
+    b.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&((p10 + p01.transpose()) * -0.5));
+    b.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&((p11 + p11.transpose()) * -0.5));
     let momentum = y.mul_motion(v);
-    let half = Force { linear: momentum.linear * 0.5, angular: momentum.angular * 0.5 };
+    let half = Force {
+        linear: momentum.linear * 0.5,
+        angular: momentum.angular * 0.5,
+    };
     add_force_cross_matrix(&half, &mut b);
     b
 }
 
 /// `C(q, v)` into `data.coriolis`. `C v + G = ` [`crate::nonlinear_effects`].
-pub fn coriolis_matrix<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64]) -> Result<&'d DMatrix<f64>, DimensionError> {
+pub fn coriolis_matrix<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<&'d DMatrix<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
@@ -76,7 +91,8 @@ pub fn coriolis_matrix<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f6
         let ys = y.mul_motion(&motion_of(s)).to_vector();
         let bts = b.tr_mul(s);
         for j in 0..i {
-            data.coriolis[(i, j)] = ys.dot(&data.world_subspace_rate[j]) + bts.dot(&data.world_subspace[j]);
+            data.coriolis[(i, j)] =
+                ys.dot(&data.world_subspace_rate[j]) + bts.dot(&data.world_subspace[j]);
         }
         if i > 0 {
             data.composite[i - 1] = data.composite[i - 1].add(&y);

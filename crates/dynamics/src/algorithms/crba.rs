@@ -8,7 +8,11 @@ use crate::error::{check_len, DimensionError};
 use crate::model::Model;
 
 /// `M(q)`, full and symmetric, into `data.mass_matrix`.
-pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Result<&'d DMatrix<f64>, DimensionError> {
+pub fn crba<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+) -> Result<&'d DMatrix<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     update_joint_placements(model, data, q);

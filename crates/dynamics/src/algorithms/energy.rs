@@ -7,7 +7,12 @@ use crate::model::Model;
 use crate::spatial::Motion;
 
 /// Kinetic energy `1/2 v^T M(q) v` (J).
-pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> Result<f64, DimensionError> {
+pub fn kinetic_energy(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<f64, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
@@ -15,7 +20,8 @@ pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) -> R
     let mut parent = Motion::zero();
     let mut energy = 0.0;
     for i in 0..n {
-        let vi = data.joint_placements[i].act_inv_motion(&parent) + model.joints[i].motion_subspace().scaled(v[i]);
+        let vi = data.joint_placements[i].act_inv_motion(&parent)
+            + model.joints[i].motion_subspace().scaled(v[i]);
         energy += model.bodies[i].kinetic_energy(&vi);
         parent = vi;
     }

@@ -15,11 +15,20 @@ use crate::spatial::{Motion, Transform};
 /// # Panics
 /// Never for a valid frame index; an out-of-range index is reported as a
 /// [`DimensionError`] on argument `frame`.
-pub fn frame_jacobian<'d>(model: &Model, data: &'d mut Data, q: &[f64], frame: usize) -> Result<&'d Matrix6xX<f64>, DimensionError> {
+pub fn frame_jacobian<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    frame: usize,
+) -> Result<&'d Matrix6xX<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     if frame >= model.frames.len() {
-        return Err(DimensionError { argument: "frame", expected: model.frames.len(), found: frame });
+        return Err(DimensionError {
+            argument: "frame",
+            expected: model.frames.len(),
+            found: frame,
+        });
     }
     update_joint_placements(model, data, q);
     update_body_placements(data);
@@ -37,7 +46,8 @@ pub fn frame_jacobian<'d>(model: &Model, data: &'d mut Data, q: &[f64], frame: u
                         col.fixed_rows_mut::<3>(3).fill(0.0);
                     }
                     _ => {
-                        col.fixed_rows_mut::<3>(0).copy_from(&axis.cross(&(origin - o.translation)));
+                        col.fixed_rows_mut::<3>(0)
+                            .copy_from(&axis.cross(&(origin - o.translation)));
                         col.fixed_rows_mut::<3>(3).copy_from(&axis);
                     }
                 }
@@ -49,19 +59,33 @@ pub fn frame_jacobian<'d>(model: &Model, data: &'d mut Data, q: &[f64], frame: u
 }
 
 /// The tip frame's Jacobian (see [`frame_jacobian`]).
-pub fn tip_jacobian<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Result<&'d Matrix6xX<f64>, DimensionError> {
+pub fn tip_jacobian<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+) -> Result<&'d Matrix6xX<f64>, DimensionError> {
     frame_jacobian(model, data, q, model.tip_frame)
 }
 
 /// `Jdot(q, v) v` of frame `frame` into `data.jdot_qdot`: the frame origin's classical
 /// linear acceleration and the angular acceleration when `qddot = 0`, linear first,
 /// base axes. Task-space controllers use `xddot = J qddot + Jdot qdot`.
-pub fn frame_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], frame: usize) -> Result<&'d Vector6<f64>, DimensionError> {
+pub fn frame_jdot_qdot<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    frame: usize,
+) -> Result<&'d Vector6<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
     if frame >= model.frames.len() {
-        return Err(DimensionError { argument: "frame", expected: model.frames.len(), found: frame });
+        return Err(DimensionError {
+            argument: "frame",
+            expected: model.frames.len(),
+            found: frame,
+        });
     }
     update_joint_placements(model, data, q);
     update_body_placements(data);
@@ -79,12 +103,24 @@ pub fn frame_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f6
     let w = velocity.angular;
     let point_velocity: Vector3<f64> = velocity.linear + w.cross(&p);
     let linear = acceleration.linear + acceleration.angular.cross(&p) + w.cross(&point_velocity);
-    data.jdot_qdot = Vector6::new(linear.x, linear.y, linear.z, acceleration.angular.x, acceleration.angular.y, acceleration.angular.z);
+    data.jdot_qdot = Vector6::new(
+        linear.x,
+        linear.y,
+        linear.z,
+        acceleration.angular.x,
+        acceleration.angular.y,
+        acceleration.angular.z,
+    );
     Ok(&data.jdot_qdot)
 }
 
 /// `Jdot qdot` of the tip frame (see [`frame_jdot_qdot`]).
-pub fn tip_jdot_qdot<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64]) -> Result<&'d Vector6<f64>, DimensionError> {
+pub fn tip_jdot_qdot<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<&'d Vector6<f64>, DimensionError> {
     frame_jdot_qdot(model, data, q, v, model.tip_frame)
 }
 

@@ -10,7 +10,13 @@ use crate::model::Model;
 use crate::spatial::{Force, Motion};
 
 /// Joint torques `tau = M(q) a + C(q, v) v + G(q)`, into `data.tau`.
-pub fn rnea<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], a: &[f64]) -> Result<&'d DVector<f64>, DimensionError> {
+pub fn rnea<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+) -> Result<&'d DVector<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
@@ -39,7 +45,11 @@ pub fn rnea_with_tip_wrench<'d>(
 }
 
 /// Generalised gravity `G(q)`, into `data.gravity_torque`.
-pub fn gravity_torque<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Result<&'d DVector<f64>, DimensionError> {
+pub fn gravity_torque<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+) -> Result<&'d DVector<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     update_joint_placements(model, data, q);
@@ -49,7 +59,10 @@ pub fn gravity_torque<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Resul
     for i in 0..n {
         a = data.joint_placements[i].rotation.tr_mul(&a);
         let inertia = &model.bodies[i];
-        data.forces[i] = Force { linear: a * inertia.mass, angular: inertia.first_moment.cross(&a) };
+        data.forces[i] = Force {
+            linear: a * inertia.mass,
+            angular: inertia.first_moment.cross(&a),
+        };
     }
     for i in (0..n).rev() {
         let f = data.forces[i];
@@ -63,7 +76,12 @@ pub fn gravity_torque<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> Resul
 }
 
 /// Nonlinear effects `C(q, v) v + G(q)`, into `data.nonlinear_effects`.
-pub fn nonlinear_effects<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64]) -> Result<&'d DVector<f64>, DimensionError> {
+pub fn nonlinear_effects<'d>(
+    model: &Model,
+    data: &'d mut Data,
+    q: &[f64],
+    v: &[f64],
+) -> Result<&'d DVector<f64>, DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
@@ -74,7 +92,11 @@ pub fn nonlinear_effects<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[
 
 /// The wrench `w` (base axes, moment about the tip origin) expressed in the frame of the
 /// body that carries the tip, moment about that body's origin. Needs `data.body_placements`.
-pub(crate) fn tip_wrench_in_body(model: &Model, data: &Data, wrench: &Vector6<f64>) -> Option<(usize, Force)> {
+pub(crate) fn tip_wrench_in_body(
+    model: &Model,
+    data: &Data,
+    wrench: &Vector6<f64>,
+) -> Option<(usize, Force)> {
     let tip = model.tip();
     let body = tip.parent_joint?;
     let o = &data.body_placements[body];
@@ -82,16 +104,32 @@ pub(crate) fn tip_wrench_in_body(model: &Model, data: &Data, wrench: &Vector6<f6
     let f = Vector3::new(wrench[0], wrench[1], wrench[2]);
     let n = Vector3::new(wrench[3], wrench[4], wrench[5]) + (tip_origin - o.translation).cross(&f);
     let rt = o.rotation.transpose();
-    Some((body, Force { linear: rt * f, angular: rt * n }))
+    Some((
+        body,
+        Force {
+            linear: rt * f,
+            angular: rt * n,
+        },
+    ))
 }
 
 /// Shared pass; `None` velocity or acceleration means zero.
 #[inline(always)]
-fn rnea_pass(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>, a: Option<&[f64]>, wrench: Option<&Vector6<f64>>) {
+fn rnea_pass(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: Option<&[f64]>,
+    a: Option<&[f64]>,
+    wrench: Option<&Vector6<f64>>,
+) {
     let n = model.nq();
     update_joint_placements(model, data, q);
     let mut v_parent = Motion::zero();
-    let mut a_parent = Motion { linear: -model.gravity, angular: Vector3::zeros() };
+    let mut a_parent = Motion {
+        linear: -model.gravity,
+        angular: Vector3::zeros(),
+    };
     for i in 0..n {
         let joint = &model.joints[i];
         let x = &data.joint_placements[i];

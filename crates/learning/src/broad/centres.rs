@@ -81,7 +81,11 @@ pub(crate) fn kmeanspp(
         update(centre, &mut mind, &mut dist);
     }
     for _ in 0..count {
-        let total: f64 = if existing.is_empty() && out.is_empty() { 0.0 } else { mind.iter().sum() };
+        let total: f64 = if existing.is_empty() && out.is_empty() {
+            0.0
+        } else {
+            mind.iter().sum()
+        };
         let pick = if total > 0.0 && total.is_finite() {
             let r = rng.random::<f64>() * total;
             let mut acc = 0.0;
@@ -116,7 +120,11 @@ fn median(v: &mut [f64]) -> Option<f64> {
     }
     v.sort_unstable_by(|a, b| a.total_cmp(b));
     let n = v.len();
-    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
 }
 
 /// Widths of the nodes `start..L` of `centres` (row-major L x dim, standardised units),
@@ -162,7 +170,11 @@ pub(crate) fn compute_widths(
         WidthRule::GlobalMedian { scale } => {
             let mut nn: Vec<f64> = (0..l)
                 .map(|j| {
-                    (0..l).filter(|&i| i != j).map(|i| d2(row(i), row(j))).fold(f64::INFINITY, f64::min).sqrt()
+                    (0..l)
+                        .filter(|&i| i != j)
+                        .map(|i| d2(row(i), row(j)))
+                        .fold(f64::INFINITY, f64::min)
+                        .sqrt()
                 })
                 .filter(|v| v.is_finite() && *v > 0.0)
                 .collect();
@@ -172,8 +184,12 @@ pub(crate) fn compute_widths(
     };
     let bad = |w: f64| !(w.is_finite() && w > 0.0);
     if widths.iter().any(|&w| bad(w)) {
-        let mut good: Vec<f64> =
-            widths.iter().chain(existing_widths.iter()).copied().filter(|&w| !bad(w)).collect();
+        let mut good: Vec<f64> = widths
+            .iter()
+            .chain(existing_widths.iter())
+            .copied()
+            .filter(|&w| !bad(w))
+            .collect();
         let fallback = median(&mut good).unwrap_or(default_scale * (dim.max(1) as f64).sqrt());
         for w in &mut widths {
             if bad(*w) {
@@ -206,14 +222,18 @@ mod tests {
         for seed in 0..20 {
             let mut rng = rng_from_seed(seed);
             let c = kmeanspp(&pts_t, m, 2, &[], 3, &mut rng);
-            let mut clusters: Vec<i64> = c.chunks(2).map(|p| (p[0] / 10.0).round() as i64).collect();
+            let mut clusters: Vec<i64> =
+                c.chunks(2).map(|p| (p[0] / 10.0).round() as i64).collect();
             clusters.sort();
             assert_eq!(clusters, vec![0, 1, 2], "seed {seed}: {c:?}");
         }
         // With two clusters already covered by existing centres, the new one goes to the third.
         let mut rng = rng_from_seed(1);
         let c = kmeanspp(&pts_t, m, 2, &[0.0, 0.0, 10.0, -10.0], 1, &mut rng);
-        assert!((c[0] - 20.0).abs() < 0.1 && (c[1] + 20.0).abs() < 0.1, "{c:?}");
+        assert!(
+            (c[0] - 20.0).abs() < 0.1 && (c[1] + 20.0).abs() < 0.1,
+            "{c:?}"
+        );
     }
 
     #[test]
@@ -231,7 +251,13 @@ mod tests {
         let w = compute_widths(&c, 1, 0, &[], &WidthRule::Knn { k: 1, scale: 1.0 });
         assert_eq!(w, vec![4.0, 4.0, 4.0, 4.0, 4.0]);
         // A single node: sqrt(dim) * scale.
-        let w = compute_widths(&[1.0, 2.0, 3.0, 4.0], 4, 0, &[], &WidthRule::Knn { k: 3, scale: 1.5 });
+        let w = compute_widths(
+            &[1.0, 2.0, 3.0, 4.0],
+            4,
+            0,
+            &[],
+            &WidthRule::Knn { k: 3, scale: 1.5 },
+        );
         assert_eq!(w, vec![3.0]);
     }
 }

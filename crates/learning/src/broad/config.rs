@@ -27,13 +27,19 @@ pub struct FrictionFeatures {
 impl FrictionFeatures {
     /// No friction features.
     pub fn none() -> Self {
-        Self { columns: Vec::new(), scales: Vec::new() }
+        Self {
+            columns: Vec::new(),
+            scales: Vec::new(),
+        }
     }
 
     /// Features on the velocity block of X = [q, q', q''] for `n_joints` joints
     /// (columns `n..2n`) with scales 0.01, 0.05 and 0.2 rad/s.
     pub fn joint_velocities(n_joints: usize) -> Self {
-        Self { columns: (n_joints..2 * n_joints).collect(), scales: vec![0.01, 0.05, 0.2] }
+        Self {
+            columns: (n_joints..2 * n_joints).collect(),
+            scales: vec![0.01, 0.05, 0.2],
+        }
     }
 
     /// Number of extra pattern columns: `columns.len() * scales.len()`.
@@ -48,10 +54,14 @@ impl FrictionFeatures {
             )));
         }
         if let Some(&v) = self.scales.iter().find(|&&v| !(v.is_finite() && v > 0.0)) {
-            return Err(BroadError::Config(format!("friction feature scale {v} must be finite and > 0")));
+            return Err(BroadError::Config(format!(
+                "friction feature scale {v} must be finite and > 0"
+            )));
         }
         if !self.columns.is_empty() && self.scales.is_empty() {
-            return Err(BroadError::Config("friction feature columns given but no scales".into()));
+            return Err(BroadError::Config(
+                "friction feature columns given but no scales".into(),
+            ));
         }
         Ok(())
     }
@@ -141,7 +151,10 @@ impl BroadConfig {
     /// Default configuration for an arm with `n_joints` joints (inputs [q, q', q''],
     /// friction features on the velocities).
     pub fn for_arm(n_joints: usize) -> Self {
-        Self { friction: FrictionFeatures::joint_velocities(n_joints), ..Self::default() }
+        Self {
+            friction: FrictionFeatures::joint_velocities(n_joints),
+            ..Self::default()
+        }
     }
 
     pub(crate) fn validate(&self, d_in: usize) -> Result<(), BroadError> {
@@ -152,18 +165,28 @@ impl BroadConfig {
         if self.lambda_grid.is_empty() {
             return Err(BroadError::Config("lambda_grid is empty".into()));
         }
-        if let Some(&l) = self.lambda_grid.iter().find(|&&l| !(l.is_finite() && l > 0.0)) {
-            return Err(BroadError::Config(format!("lambda {l} must be finite and > 0")));
+        if let Some(&l) = self
+            .lambda_grid
+            .iter()
+            .find(|&&l| !(l.is_finite() && l > 0.0))
+        {
+            return Err(BroadError::Config(format!(
+                "lambda {l} must be finite and > 0"
+            )));
         }
         match self.widths {
             WidthRule::Knn { k, scale } => {
                 if k == 0 || !(scale.is_finite() && scale > 0.0) {
-                    return Err(BroadError::Config(format!("Knn width rule needs k > 0 and scale > 0, got k = {k}, scale = {scale}")));
+                    return Err(BroadError::Config(format!(
+                        "Knn width rule needs k > 0 and scale > 0, got k = {k}, scale = {scale}"
+                    )));
                 }
             }
             WidthRule::GlobalMedian { scale } => {
                 if !(scale.is_finite() && scale > 0.0) {
-                    return Err(BroadError::Config(format!("width scale {scale} must be > 0")));
+                    return Err(BroadError::Config(format!(
+                        "width scale {scale} must be > 0"
+                    )));
                 }
             }
             WidthRule::Fixed(w) => {
@@ -179,7 +202,9 @@ impl BroadConfig {
         if self.threads > 0 {
             self.threads
         } else {
-            std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+            std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)
         }
     }
 }

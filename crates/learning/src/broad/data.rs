@@ -32,10 +32,18 @@ impl<'a> Dataset<'a> {
         d_out: usize,
     ) -> Result<Self, BroadError> {
         if d_in == 0 {
-            return Err(BroadError::Dimension { what: "input width d_in", expected: 1, got: 0 });
+            return Err(BroadError::Dimension {
+                what: "input width d_in",
+                expected: 1,
+                got: 0,
+            });
         }
         if d_out == 0 {
-            return Err(BroadError::Dimension { what: "output width d_out", expected: 1, got: 0 });
+            return Err(BroadError::Dimension {
+                what: "output width d_out",
+                expected: 1,
+                got: 0,
+            });
         }
         if inputs.len() % d_in != 0 {
             return Err(BroadError::Dimension {
@@ -64,7 +72,13 @@ impl<'a> Dataset<'a> {
         }
         check_finite(inputs, d_in, "inputs")?;
         check_finite(targets, d_out, "targets")?;
-        Ok(Self { inputs, targets, d_in, d_out, n_samples })
+        Ok(Self {
+            inputs,
+            targets,
+            d_in,
+            d_out,
+            n_samples,
+        })
     }
 
     /// Number of rows N.
@@ -102,7 +116,11 @@ impl<'a> Dataset<'a> {
 }
 
 /// Returns the first non-finite entry as an error naming its row and column.
-pub(crate) fn check_finite(values: &[f64], width: usize, what: &'static str) -> Result<(), BroadError> {
+pub(crate) fn check_finite(
+    values: &[f64],
+    width: usize,
+    what: &'static str,
+) -> Result<(), BroadError> {
     // Fast path: a sum of `v * 0` is NaN iff some value is NaN or infinite.
     let mut acc = 0.0f64;
     for chunk in values.chunks(4096) {
@@ -117,7 +135,12 @@ pub(crate) fn check_finite(values: &[f64], width: usize, what: &'static str) -> 
     }
     for (idx, &v) in values.iter().enumerate() {
         if !v.is_finite() {
-            return Err(BroadError::NonFinite { what, row: idx / width, column: idx % width, value: v });
+            return Err(BroadError::NonFinite {
+                what,
+                row: idx / width,
+                column: idx % width,
+                value: v,
+            });
         }
     }
     Ok(())

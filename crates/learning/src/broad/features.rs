@@ -35,7 +35,11 @@ impl NodeSet {
     /// Checks shapes, finiteness and positive widths.
     pub fn validate(&self, d_in: usize) -> Result<(), BroadError> {
         if self.dim != d_in {
-            return Err(BroadError::Dimension { what: "node centre width", expected: d_in, got: self.dim });
+            return Err(BroadError::Dimension {
+                what: "node centre width",
+                expected: d_in,
+                got: self.dim,
+            });
         }
         if self.centres.len() != self.widths.len() * self.dim {
             return Err(BroadError::Dimension {
@@ -45,8 +49,15 @@ impl NodeSet {
             });
         }
         super::data::check_finite(&self.centres, self.dim.max(1), "node centres")?;
-        if let Some((j, &w)) = self.widths.iter().enumerate().find(|(_, &w)| !(w.is_finite() && w > 0.0)) {
-            return Err(BroadError::Config(format!("node {j} has width {w}; widths must be finite and > 0")));
+        if let Some((j, &w)) = self
+            .widths
+            .iter()
+            .enumerate()
+            .find(|(_, &w)| !(w.is_finite() && w > 0.0))
+        {
+            return Err(BroadError::Config(format!(
+                "node {j} has width {w}; widths must be finite and > 0"
+            )));
         }
         Ok(())
     }
@@ -75,7 +86,11 @@ pub(crate) struct FeatureMap {
 }
 
 impl FeatureMap {
-    pub(crate) fn new(standardiser: Standardiser, friction: FrictionFeatures, nodes: NodeSet) -> Self {
+    pub(crate) fn new(
+        standardiser: Standardiser,
+        friction: FrictionFeatures,
+        nodes: NodeSet,
+    ) -> Self {
         let d = nodes.dim;
         let l = nodes.len();
         let mut centres_t = vec![0.0; d * l];
@@ -84,10 +99,22 @@ impl FeatureMap {
                 centres_t[k * l + j] = nodes.centres[j * d + k];
             }
         }
-        let un = nodes.centres.chunks_exact(d.max(1)).map(|c| c.iter().map(|v| v * v).sum()).collect();
+        let un = nodes
+            .centres
+            .chunks_exact(d.max(1))
+            .map(|c| c.iter().map(|v| v * v).sum())
+            .collect();
         let inv_eta2 = nodes.widths.iter().map(|w| 1.0 / (w * w)).collect();
         let inv_scales = friction.scales.iter().map(|v| 1.0 / v).collect();
-        Self { standardiser, friction, nodes, centres_t, un, inv_eta2, inv_scales }
+        Self {
+            standardiser,
+            friction,
+            nodes,
+            centres_t,
+            un,
+            inv_eta2,
+            inv_scales,
+        }
     }
 
     pub(crate) fn d_in(&self) -> usize {

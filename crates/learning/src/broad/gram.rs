@@ -7,8 +7,8 @@
 use super::config::GramStrategy;
 use super::data::Dataset;
 use super::features::FeatureMap;
-use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
 use faer::{Accum, Mat, MatRef, Par};
 
 /// One pattern block handed to a consumer.
@@ -84,7 +84,10 @@ pub(crate) fn for_each_block<S: Send>(
                         })
                     })
                     .collect();
-                handles.into_iter().map(|h| h.join().expect("broad worker panicked")).collect()
+                handles
+                    .into_iter()
+                    .map(|h| h.join().expect("broad worker panicked"))
+                    .collect()
             })
         }
         GramStrategy::SharedGemm => {
@@ -138,7 +141,12 @@ pub(crate) struct GramAcc {
 
 impl GramAcc {
     fn zeros(p: usize, d_out: usize) -> Self {
-        Self { g: Mat::zeros(p, p), aty: Mat::zeros(p, d_out), y_sum: vec![0.0; d_out], y_sq: vec![0.0; d_out] }
+        Self {
+            g: Mat::zeros(p, p),
+            aty: Mat::zeros(p, d_out),
+            y_sum: vec![0.0; d_out],
+            y_sq: vec![0.0; d_out],
+        }
     }
     fn add(&mut self, other: &GramAcc) {
         self.g += &other.g;
@@ -228,12 +236,21 @@ pub(crate) fn accumulate_new_rows(
         || (Mat::<f64>::zeros(k, p), Mat::<f64>::zeros(k, d_out)),
         |(rows, aty), block, par| {
             let new_t = block.at.subrows(p_old, k);
-            matmul(rows.as_mut(), Accum::Add, new_t, block.at.transpose(), 1.0, par);
+            matmul(
+                rows.as_mut(),
+                Accum::Add,
+                new_t,
+                block.at.transpose(),
+                1.0,
+                par,
+            );
             matmul(aty.as_mut(), Accum::Add, new_t, block.y, 1.0, par);
         },
     );
     let mut it = parts.into_iter();
-    let (mut rows, mut aty) = it.next().unwrap_or_else(|| (Mat::zeros(k, p), Mat::zeros(k, d_out)));
+    let (mut rows, mut aty) = it
+        .next()
+        .unwrap_or_else(|| (Mat::zeros(k, p), Mat::zeros(k, d_out)));
     for (r, a) in it {
         rows += &r;
         aty += &a;
@@ -265,7 +282,14 @@ pub(crate) fn prediction_sse(
         |(sse, pred), block, par| {
             let b = block.at.ncols();
             let mut pv = pred.as_mut().subcols_mut(0, b);
-            matmul(pv.as_mut(), Accum::Replace, w_all.transpose(), block.at, 1.0, par);
+            matmul(
+                pv.as_mut(),
+                Accum::Replace,
+                w_all.transpose(),
+                block.at,
+                1.0,
+                par,
+            );
             for c in 0..m {
                 for o in 0..d_out {
                     let row = c * d_out + o;

@@ -115,7 +115,13 @@ impl BroadModel {
             pattern_width: p as u64,
             friction_columns: fm.friction.columns.iter().map(|&c| c as u64).collect(),
             growth_samples: self.state.as_ref().map(|s| s.n_samples as u64),
-            arrays: arrays.iter().map(|(name, v)| ArrayInfo { name: name.to_string(), len: v.len() as u64 }).collect(),
+            arrays: arrays
+                .iter()
+                .map(|(name, v)| ArrayInfo {
+                    name: name.to_string(),
+                    len: v.len() as u64,
+                })
+                .collect(),
         };
         let header = serde_json::to_vec(&header).expect("header serialises");
         let payload_len: usize = arrays.iter().map(|(_, v)| v.len() * 8).sum();
@@ -139,21 +145,33 @@ impl BroadModel {
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), BroadError> {
         let path = path.as_ref();
         let bytes = self.to_bytes();
-        let io_err = |p: &Path, e: std::io::Error| BroadError::Io { path: p.to_path_buf(), source: e };
+        let io_err = |p: &Path, e: std::io::Error| BroadError::Io {
+            path: p.to_path_buf(),
+            source: e,
+        };
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let file_name = path
-            .file_name()
-            .ok_or_else(|| BroadError::Format { path: path.to_path_buf(), reason: "not a file path".into() })?;
+        let file_name = path.file_name().ok_or_else(|| BroadError::Format {
+            path: path.to_path_buf(),
+            reason: "not a file path".into(),
+        })?;
         let nanos = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.subsec_nanos())
             .unwrap_or(0);
-        let tmp = dir.join(format!(".{}.tmp-{}-{}", file_name.to_string_lossy(), std::process::id(), nanos));
+        let tmp = dir.join(format!(
+            ".{}.tmp-{}-{}",
+            file_name.to_string_lossy(),
+            std::process::id(),
+            nanos
+        ));
         let write = || -> Result<(), std::io::Error> {
-            let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)?;
             f.write_all(&bytes)?;
             f.flush()?;
             f.sync_all()?;
@@ -178,25 +196,41 @@ impl BroadModel {
     /// wrong-version file gives an error naming the file and the problem.
     pub fn load(path: impl AsRef<Path>) -> Result<BroadModel, BroadError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| BroadError::Io { path: path.to_path_buf(), source: e })?;
+        let bytes = std::fs::read(path).map_err(|e| BroadError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
         Self::from_bytes(&bytes, path)
     }
 
     /// Parses the bytes of a model file; `path` only names the source in errors.
     pub fn from_bytes(bytes: &[u8], path: impl AsRef<Path>) -> Result<BroadModel, BroadError> {
         let path = path.as_ref();
-        let fmt = |reason: String| BroadError::Format { path: path.to_path_buf(), reason };
+        let fmt = |reason: String| BroadError::Format {
+            path: path.to_path_buf(),
+            reason,
+        };
         if bytes.len() < 8 || &bytes[..8] != MAGIC {
             if bytes.len() < 8 && MAGIC.starts_with(bytes) {
-                return Err(fmt(format!("truncated: {} bytes, not even the 8-byte magic", bytes.len())));
+                return Err(fmt(format!(
+                    "truncated: {} bytes, not even the 8-byte magic",
+                    bytes.len()
+                )));
             }
-            return Err(fmt(format!("not an {FORMAT_NAME} model file (bad magic bytes)")));
+            return Err(fmt(format!(
+                "not an {FORMAT_NAME} model file (bad magic bytes)"
+            )));
         }
         if bytes.len() < 16 {
-            return Err(fmt(format!("truncated: {} bytes, the header length field is missing", bytes.len())));
+            return Err(fmt(format!(
+                "truncated: {} bytes, the header length field is missing",
+                bytes.len()
+            )));
         }
         let h_len = u64::from_le_bytes(bytes[8..16].try_into().expect("8 bytes"));
-        let h_end = 16u64.checked_add(h_len).filter(|&e| e <= bytes.len() as u64);
+        let h_end = 16u64
+            .checked_add(h_len)
+            .filter(|&e| e <= bytes.len() as u64);
         let Some(h_end) = h_end else {
             return Err(fmt(format!(
                 "truncated: header of {h_len} bytes announced, file has only {} bytes",
@@ -210,18 +244,26 @@ impl BroadModel {
             .map_err(|e| fmt(format!("corrupted header (not valid JSON: {e})")))?;
         match id.format.as_deref() {
             Some(FORMAT_NAME) => {}
-            Some(other) => return Err(fmt(format!("format is {other:?}, expected {FORMAT_NAME:?}"))),
+            Some(other) => {
+                return Err(fmt(format!(
+                    "format is {other:?}, expected {FORMAT_NAME:?}"
+                )))
+            }
             None => return Err(fmt("corrupted header: no \"format\" field".into())),
         }
         match id.format_version {
             Some(FORMAT_VERSION) => {}
             Some(v) => {
-                return Err(BroadError::UnsupportedVersion { path: path.to_path_buf(), found: v, supported: FORMAT_VERSION })
+                return Err(BroadError::UnsupportedVersion {
+                    path: path.to_path_buf(),
+                    found: v,
+                    supported: FORMAT_VERSION,
+                })
             }
             None => return Err(fmt("corrupted header: no \"format_version\" field".into())),
         }
-        let header: Header =
-            serde_json::from_slice(header_bytes).map_err(|e| fmt(format!("corrupted header: {e}")))?;
+        let header: Header = serde_json::from_slice(header_bytes)
+            .map_err(|e| fmt(format!("corrupted header: {e}")))?;
         // Expected arrays from the dimensions (the header's list must agree).
         let d = header.d_in as usize;
         let n = header.d_out as usize;
@@ -229,7 +271,12 @@ impl BroadModel {
         let f = header.friction_columns.len();
         let mul = |a: u64, b: u64| a.checked_mul(b);
         let too_big = || fmt("corrupted header: dimensions overflow".into());
-        let n_scales_total = header.arrays.iter().find(|a| a.name == "friction_scales").map(|a| a.len).unwrap_or(0);
+        let n_scales_total = header
+            .arrays
+            .iter()
+            .find(|a| a.name == "friction_scales")
+            .map(|a| a.len)
+            .unwrap_or(0);
         let p = mul(n_scales_total, f as u64)
             .and_then(|fs| (header.d_in).checked_add(fs))
             .and_then(|v| v.checked_add(1))
@@ -248,7 +295,10 @@ impl BroadModel {
             ("input_mean", header.d_in),
             ("input_std", header.d_in),
             ("friction_scales", n_scales_total),
-            ("centres", mul(header.nodes, header.d_in).ok_or_else(too_big)?),
+            (
+                "centres",
+                mul(header.nodes, header.d_in).ok_or_else(too_big)?,
+            ),
             ("widths", header.nodes),
             ("weights", mul(p, header.d_out).ok_or_else(too_big)?),
             ("lambda", 2),
@@ -261,11 +311,19 @@ impl BroadModel {
             expected.push(("y_sq", header.d_out));
         }
         if header.arrays.len() != expected.len()
-            || header.arrays.iter().zip(&expected).any(|(a, (name, len))| a.name != *name || a.len != *len)
+            || header
+                .arrays
+                .iter()
+                .zip(&expected)
+                .any(|(a, (name, len))| a.name != *name || a.len != *len)
         {
             return Err(fmt(format!(
                 "corrupted header: arrays {:?} do not match the dimensions (expected {:?})",
-                header.arrays.iter().map(|a| (a.name.as_str(), a.len)).collect::<Vec<_>>(),
+                header
+                    .arrays
+                    .iter()
+                    .map(|a| (a.name.as_str(), a.len))
+                    .collect::<Vec<_>>(),
                 expected
             )));
         }
@@ -273,18 +331,31 @@ impl BroadModel {
             .iter()
             .try_fold(0u64, |acc, (_, len)| acc.checked_add(len.checked_mul(8)?))
             .ok_or_else(too_big)?;
-        let total = (h_end as u64).checked_add(payload_len).and_then(|v| v.checked_add(8)).ok_or_else(too_big)?;
+        let total = (h_end as u64)
+            .checked_add(payload_len)
+            .and_then(|v| v.checked_add(8))
+            .ok_or_else(too_big)?;
         if (bytes.len() as u64) < total {
-            return Err(fmt(format!("truncated: {} bytes, expected {total}", bytes.len())));
+            return Err(fmt(format!(
+                "truncated: {} bytes, expected {total}",
+                bytes.len()
+            )));
         }
         if (bytes.len() as u64) > total {
-            return Err(fmt(format!("{} trailing bytes after the checksum (expected {total} bytes)", bytes.len() as u64 - total)));
+            return Err(fmt(format!(
+                "{} trailing bytes after the checksum (expected {total} bytes)",
+                bytes.len() as u64 - total
+            )));
         }
         let body_end = bytes.len() - 8;
         let stored = u64::from_le_bytes(bytes[body_end..].try_into().expect("8 bytes"));
         let computed = fnv1a64(&bytes[..body_end]);
         if stored != computed {
-            return Err(BroadError::Checksum { path: path.to_path_buf(), stored, computed });
+            return Err(BroadError::Checksum {
+                path: path.to_path_buf(),
+                stored,
+                computed,
+            });
         }
         // Payload.
         let mut pos = h_end;
@@ -300,7 +371,9 @@ impl BroadModel {
         let mut arrays: Vec<Vec<f64>> = expected.iter().map(|(_, len)| take(*len)).collect();
         for ((name, _), v) in expected.iter().zip(&arrays) {
             if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(fmt(format!("array {name} holds a non-finite value {x} at index {i}")));
+                return Err(fmt(format!(
+                    "array {name} holds a non-finite value {x} at index {i}"
+                )));
             }
         }
         let mut next = || arrays.remove(0);
@@ -312,16 +385,33 @@ impl BroadModel {
         let w = next();
         let lambda = next();
         let p = p as usize;
-        let friction = FrictionFeatures { columns: header.friction_columns.iter().map(|&c| c as usize).collect(), scales };
-        friction.validate(d).map_err(|e| fmt(format!("invalid friction features: {e}")))?;
+        let friction = FrictionFeatures {
+            columns: header
+                .friction_columns
+                .iter()
+                .map(|&c| c as usize)
+                .collect(),
+            scales,
+        };
+        friction
+            .validate(d)
+            .map_err(|e| fmt(format!("invalid friction features: {e}")))?;
         if d == 0 || n == 0 {
             return Err(fmt("invalid dimensions: d_in and d_out must be > 0".into()));
         }
         if std.iter().any(|&s| s <= 0.0) {
-            return Err(fmt("invalid standardisation: a standard deviation is <= 0".into()));
+            return Err(fmt(
+                "invalid standardisation: a standard deviation is <= 0".into()
+            ));
         }
-        let nodes = NodeSet { dim: d, centres, widths };
-        nodes.validate(d).map_err(|e| fmt(format!("invalid nodes: {e}")))?;
+        let nodes = NodeSet {
+            dim: d,
+            centres,
+            widths,
+        };
+        nodes
+            .validate(d)
+            .map_err(|e| fmt(format!("invalid nodes: {e}")))?;
         if !(lambda[0] > 0.0 && lambda[1] > 0.0) {
             return Err(fmt(format!("invalid lambda {lambda:?}")));
         }
@@ -351,11 +441,24 @@ impl BroadModel {
                 }
             }
             let aty = faer::MatRef::from_row_major_slice(&aty_v, p, n).to_owned();
-            let threads = std::thread::available_parallelism().map(|v| v.get()).unwrap_or(1);
-            let par = if threads > 1 { Par::rayon(threads) } else { Par::Seq };
+            let threads = std::thread::available_parallelism()
+                .map(|v| v.get())
+                .unwrap_or(1);
+            let par = if threads > 1 {
+                Par::rayon(threads)
+            } else {
+                Par::Seq
+            };
             let chol = factor(gram.as_ref(), model.lambda, model.bias_index(), par)
                 .ok_or_else(|| fmt("growth state: G + lambda D is not positive definite".into()))?;
-            model.state = Some(GrowthState { gram, aty, chol, n_samples: ns as usize, y_sum, y_sq });
+            model.state = Some(GrowthState {
+                gram,
+                aty,
+                chol,
+                n_samples: ns as usize,
+                y_sum,
+                y_sq,
+            });
         }
         Ok(model)
     }

@@ -18,7 +18,7 @@ pub(crate) fn exp_nonpos<const FMA: bool>(x: f64) -> f64 {
     const LOG2E: f64 = std::f64::consts::LOG2_E;
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000); // 6.93147180369123816490e-01
     const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76); // 1.90821492927058770002e-10
-    // 1.5 * 2^52: adding it rounds to an integer and leaves the integer in the low bits.
+                                                               // 1.5 * 2^52: adding it rounds to an integer and leaves the integer in the low bits.
     const MAGIC: f64 = 6_755_399_441_055_744.0;
     const MAGIC_BITS: u64 = 0x4338_0000_0000_0000;
     const MIN_ARG: f64 = -708.39;
@@ -62,7 +62,12 @@ pub(crate) fn exp_nonpos<const FMA: bool>(x: f64) -> f64 {
 }
 
 #[inline(always)]
-fn gauss_from_neg2dots_body<const FMA: bool>(col: &mut [f64], xn: f64, un: &[f64], inv_eta2: &[f64]) {
+fn gauss_from_neg2dots_body<const FMA: bool>(
+    col: &mut [f64],
+    xn: f64,
+    un: &[f64],
+    inv_eta2: &[f64],
+) {
     let n = col.len().min(un.len()).min(inv_eta2.len());
     let (col, un, ie) = (&mut col[..n], &un[..n], &inv_eta2[..n]);
     for j in 0..n {
@@ -96,7 +101,11 @@ fn sqdist_body<const FMA: bool>(xs: &[f64], centres_t: &[f64], dist: &mut [f64])
             let row = &centres_t[k * l + j0..k * l + j0 + W];
             for t in 0..W {
                 let e = x - row[t];
-                acc[t] = if FMA { e.mul_add(e, acc[t]) } else { e * e + acc[t] };
+                acc[t] = if FMA {
+                    e.mul_add(e, acc[t])
+                } else {
+                    e * e + acc[t]
+                };
             }
         }
         dist[j0..j0 + W].copy_from_slice(&acc);
@@ -122,7 +131,11 @@ fn dot_body<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
         let aa = &a[c * 16..c * 16 + 16];
         let bb = &b[c * 16..c * 16 + 16];
         for i in 0..16 {
-            acc[i] = if FMA { aa[i].mul_add(bb[i], acc[i]) } else { aa[i] * bb[i] + acc[i] };
+            acc[i] = if FMA {
+                aa[i].mul_add(bb[i], acc[i])
+            } else {
+                aa[i] * bb[i] + acc[i]
+            };
         }
     }
     let mut s = 0.0;
@@ -247,7 +260,18 @@ mod tests {
             worst = worst.max(((a - e) / e).abs());
             x += 0.000_731_3;
         }
-        for &x in &[0.0, -0.0, -1e-300, -1e-17, -1e-9, -0.346_573_590_279_972_6, -0.5, -1.0, -700.0, -708.3] {
+        for &x in &[
+            0.0,
+            -0.0,
+            -1e-300,
+            -1e-17,
+            -1e-9,
+            -0.346_573_590_279_972_6,
+            -0.5,
+            -1.0,
+            -700.0,
+            -708.3,
+        ] {
             let e = f64::exp(x);
             worst = worst.max(((exp_nonpos::<FMA>(x) - e) / e).abs());
         }

@@ -208,10 +208,18 @@ fn train_nrmse(state: &GrowthState, w: MatRef<'_, f64>) -> Vec<f64> {
 
 fn check_same_widths(train: &Dataset<'_>, other: &Dataset<'_>) -> Result<(), BroadError> {
     if other.d_in() != train.d_in() {
-        return Err(BroadError::Dimension { what: "validation input width", expected: train.d_in(), got: other.d_in() });
+        return Err(BroadError::Dimension {
+            what: "validation input width",
+            expected: train.d_in(),
+            got: other.d_in(),
+        });
     }
     if other.d_out() != train.d_out() {
-        return Err(BroadError::Dimension { what: "validation output width", expected: train.d_out(), got: other.d_out() });
+        return Err(BroadError::Dimension {
+            what: "validation output width",
+            expected: train.d_out(),
+            got: other.d_out(),
+        });
     }
     Ok(())
 }
@@ -242,14 +250,23 @@ pub fn fit(
     let t_std = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let mut rng = rng_from_seed(config.seed);
-    let (pts_t, m) = subsample_standardised(train, &standardiser, config.centre_subsample, &mut rng);
+    let (pts_t, m) =
+        subsample_standardised(train, &standardiser, config.centre_subsample, &mut rng);
     let d = train.d_in();
     let centres = kmeanspp(&pts_t, m, d, &[], config.nodes, &mut rng);
     drop(pts_t);
     let widths = compute_widths(&centres, d, 0, &[], &config.widths);
-    let nodes = NodeSet { dim: d, centres, widths };
+    let nodes = NodeSet {
+        dim: d,
+        centres,
+        widths,
+    };
     let t_centres = t1.elapsed().as_secs_f64();
-    let mut times = PhaseTimes { standardise_s: t_std, centres_s: t_centres, ..Default::default() };
+    let mut times = PhaseTimes {
+        standardise_s: t_std,
+        centres_s: t_centres,
+        ..Default::default()
+    };
     let out = fit_inner(train, validation, config, standardiser, nodes, &mut times);
     times.total_s = t0.elapsed().as_secs_f64();
     out.map(|(m, mut r)| {
@@ -277,8 +294,18 @@ pub fn fit_with_nodes(
         return Err(BroadError::NeedValidation(config.lambda_grid.len()));
     }
     let standardiser = Standardiser::from_data(train);
-    let mut times = PhaseTimes { standardise_s: t0.elapsed().as_secs_f64(), ..Default::default() };
-    let out = fit_inner(train, validation, config, standardiser, nodes.clone(), &mut times);
+    let mut times = PhaseTimes {
+        standardise_s: t0.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+    let out = fit_inner(
+        train,
+        validation,
+        config,
+        standardiser,
+        nodes.clone(),
+        &mut times,
+    );
     times.total_s = t0.elapsed().as_secs_f64();
     out.map(|(m, mut r)| {
         r.times = times;
@@ -318,10 +345,18 @@ fn fit_inner(
             }
             None => false,
         };
-        scan.push(LambdaScore { lambda_rel: rel, lambda, factorised: ok, validation_nrmse: Vec::new(), mean_nrmse: None });
+        scan.push(LambdaScore {
+            lambda_rel: rel,
+            lambda,
+            factorised: ok,
+            validation_nrmse: Vec::new(),
+            mean_nrmse: None,
+        });
     }
     if solutions.is_empty() {
-        return Err(BroadError::NotPositiveDefinite { tried: scan.iter().map(|s| s.lambda).collect() });
+        return Err(BroadError::NotPositiveDefinite {
+            tried: scan.iter().map(|s| s.lambda).collect(),
+        });
     }
     times.solve_s = t.elapsed().as_secs_f64();
 
@@ -333,7 +368,14 @@ fn fit_inner(
         for (i, (_, w)) in solutions.iter().enumerate() {
             w_all.as_mut().subcols_mut(i * d_out, d_out).copy_from(w);
         }
-        let sse = prediction_sse(&fm, val, w_all.as_ref(), config.block_rows, threads, config.gram_strategy);
+        let sse = prediction_sse(
+            &fm,
+            val,
+            w_all.as_ref(),
+            config.block_rows,
+            threads,
+            config.gram_strategy,
+        );
         let std = target_std(val);
         let mut best = f64::INFINITY;
         for (i, (c, _)) in solutions.iter().enumerate() {
@@ -354,9 +396,19 @@ fn fit_inner(
     let (c, w) = solutions.swap_remove(chosen);
     drop(solutions);
     let lambda = scan[c].lambda;
-    let chol = factor(acc.g.as_ref(), lambda, bias, par)
-        .ok_or_else(|| BroadError::NotPositiveDefinite { tried: vec![lambda] })?;
-    let state = GrowthState { gram: acc.g, aty: acc.aty, chol, n_samples: n, y_sum: acc.y_sum, y_sq: acc.y_sq };
+    let chol = factor(acc.g.as_ref(), lambda, bias, par).ok_or_else(|| {
+        BroadError::NotPositiveDefinite {
+            tried: vec![lambda],
+        }
+    })?;
+    let state = GrowthState {
+        gram: acc.g,
+        aty: acc.aty,
+        chol,
+        n_samples: n,
+        y_sum: acc.y_sum,
+        y_sq: acc.y_sq,
+    };
     let train_e = train_nrmse(&state, w.as_ref());
     times.solve_s += t.elapsed().as_secs_f64();
 
@@ -459,15 +511,26 @@ impl BroadModel {
 
     /// A workspace sized for this model.
     pub fn workspace(&self) -> Workspace {
-        Workspace { pattern: vec![0.0; self.pattern_width()] }
+        Workspace {
+            pattern: vec![0.0; self.pattern_width()],
+        }
     }
 
     fn check_input(&self, x: &[f64]) -> Result<(), BroadError> {
         if x.len() != self.d_in() {
-            return Err(BroadError::Dimension { what: "input vector", expected: self.d_in(), got: x.len() });
+            return Err(BroadError::Dimension {
+                what: "input vector",
+                expected: self.d_in(),
+                got: x.len(),
+            });
         }
         if let Some((k, &v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(BroadError::NonFinite { what: "input vector", row: 0, column: k, value: v });
+            return Err(BroadError::NonFinite {
+                what: "input vector",
+                row: 0,
+                column: k,
+                value: v,
+            });
         }
         Ok(())
     }
@@ -476,7 +539,11 @@ impl BroadModel {
     pub fn pattern_into(&self, x: &[f64], a: &mut [f64]) -> Result<(), BroadError> {
         self.check_input(x)?;
         if a.len() != self.pattern_width() {
-            return Err(BroadError::Dimension { what: "pattern row", expected: self.pattern_width(), got: a.len() });
+            return Err(BroadError::Dimension {
+                what: "pattern row",
+                expected: self.pattern_width(),
+                got: a.len(),
+            });
         }
         self.fm.fill_row(x, a);
         Ok(())
@@ -485,10 +552,19 @@ impl BroadModel {
     /// `out = W^T a(x)`: the estimate `f_hat(q, q', q'')` of METHOD.md section 5 for one
     /// raw input row. Allocation-free when `ws` comes from [`workspace`](Self::workspace)
     /// (a workspace made before a [`grow`](Self::grow) is enlarged once).
-    pub fn predict_into(&self, x: &[f64], out: &mut [f64], ws: &mut Workspace) -> Result<(), BroadError> {
+    pub fn predict_into(
+        &self,
+        x: &[f64],
+        out: &mut [f64],
+        ws: &mut Workspace,
+    ) -> Result<(), BroadError> {
         self.check_input(x)?;
         if out.len() != self.d_out {
-            return Err(BroadError::Dimension { what: "output vector", expected: self.d_out, got: out.len() });
+            return Err(BroadError::Dimension {
+                what: "output vector",
+                expected: self.d_out,
+                got: out.len(),
+            });
         }
         let p = self.pattern_width();
         if ws.pattern.len() != p {
@@ -505,16 +581,28 @@ impl BroadModel {
     pub fn predict_batch(&self, inputs: &[f64], out: &mut [f64]) -> Result<(), BroadError> {
         let d = self.d_in();
         if inputs.len() % d != 0 {
-            return Err(BroadError::Dimension { what: "input array length (multiple of d_in)", expected: (inputs.len() / d + 1) * d, got: inputs.len() });
+            return Err(BroadError::Dimension {
+                what: "input array length (multiple of d_in)",
+                expected: (inputs.len() / d + 1) * d,
+                got: inputs.len(),
+            });
         }
         let rows = inputs.len() / d;
         if out.len() != rows * self.d_out {
-            return Err(BroadError::Dimension { what: "output array length", expected: rows * self.d_out, got: out.len() });
+            return Err(BroadError::Dimension {
+                what: "output array length",
+                expected: rows * self.d_out,
+                got: out.len(),
+            });
         }
         check_finite(inputs, d, "inputs")?;
         let mut ws = self.workspace();
         for i in 0..rows {
-            self.predict_into(&inputs[i * d..(i + 1) * d], &mut out[i * self.d_out..(i + 1) * self.d_out], &mut ws)?;
+            self.predict_into(
+                &inputs[i * d..(i + 1) * d],
+                &mut out[i * self.d_out..(i + 1) * self.d_out],
+                &mut ws,
+            )?;
         }
         Ok(())
     }
@@ -523,12 +611,24 @@ impl BroadModel {
     /// by blocked passes (`threads`, 0 = all cores).
     pub fn evaluate(&self, data: &Dataset<'_>, threads: usize) -> Result<Vec<f64>, BroadError> {
         if data.d_in() != self.d_in() {
-            return Err(BroadError::Dimension { what: "data input width", expected: self.d_in(), got: data.d_in() });
+            return Err(BroadError::Dimension {
+                what: "data input width",
+                expected: self.d_in(),
+                got: data.d_in(),
+            });
         }
         if data.d_out() != self.d_out {
-            return Err(BroadError::Dimension { what: "data output width", expected: self.d_out, got: data.d_out() });
+            return Err(BroadError::Dimension {
+                what: "data output width",
+                expected: self.d_out,
+                got: data.d_out(),
+            });
         }
-        let threads = if threads == 0 { BroadConfig::default().thread_count() } else { threads };
+        let threads = if threads == 0 {
+            BroadConfig::default().thread_count()
+        } else {
+            threads
+        };
         let w = MatRef::from_row_major_slice(&self.w, self.pattern_width(), self.d_out);
         let sse = prediction_sse(&self.fm, data, w, 2048, threads, GramStrategy::PerThread);
         Ok(nrmse(&sse, data.n_samples(), &target_std(data)))
@@ -537,14 +637,19 @@ impl BroadModel {
     /// Re-solves with another relative lambda from the stored Gram (no pass over data).
     pub fn set_lambda(&mut self, lambda_rel: f64) -> Result<(), BroadError> {
         if !(lambda_rel.is_finite() && lambda_rel > 0.0) {
-            return Err(BroadError::Config(format!("lambda {lambda_rel} must be finite and > 0")));
+            return Err(BroadError::Config(format!(
+                "lambda {lambda_rel} must be finite and > 0"
+            )));
         }
         let bias = self.bias_index();
         let state = self.state.as_mut().ok_or(BroadError::NoGrowthState)?;
         let lambda = lambda_rel * state.n_samples as f64;
         let par = par_for(BroadConfig::default().thread_count());
-        let chol = factor(state.gram.as_ref(), lambda, bias, par)
-            .ok_or(BroadError::NotPositiveDefinite { tried: vec![lambda] })?;
+        let chol = factor(state.gram.as_ref(), lambda, bias, par).ok_or(
+            BroadError::NotPositiveDefinite {
+                tried: vec![lambda],
+            },
+        )?;
         let w = solve(chol.as_ref(), state.aty.as_ref(), par);
         state.chol = chol;
         self.lambda = lambda;
@@ -562,15 +667,28 @@ impl BroadModel {
     /// (to rounding). `train` must be the training data of the fit (checked by row count,
     /// input means and target sums). `config` supplies `block_rows`, `threads`,
     /// `gram_strategy`, `centre_subsample` and `widths`.
-    pub fn grow(&mut self, train: &Dataset<'_>, spec: &GrowthSpec, config: &BroadConfig) -> Result<GrowthReport, BroadError> {
+    pub fn grow(
+        &mut self,
+        train: &Dataset<'_>,
+        spec: &GrowthSpec,
+        config: &BroadConfig,
+    ) -> Result<GrowthReport, BroadError> {
         let t0 = Instant::now();
         config.validate(self.d_in())?;
         let d = self.d_in();
         if train.d_in() != d {
-            return Err(BroadError::Dimension { what: "growth data input width", expected: d, got: train.d_in() });
+            return Err(BroadError::Dimension {
+                what: "growth data input width",
+                expected: d,
+                got: train.d_in(),
+            });
         }
         if train.d_out() != self.d_out {
-            return Err(BroadError::Dimension { what: "growth data output width", expected: self.d_out, got: train.d_out() });
+            return Err(BroadError::Dimension {
+                what: "growth data output width",
+                expected: self.d_out,
+                got: train.d_out(),
+            });
         }
         let state = self.state.as_ref().ok_or(BroadError::NoGrowthState)?;
         self.check_training_data(train, state)?;
@@ -584,41 +702,94 @@ impl BroadModel {
             }
             GrowthSpec::KMeansPlusPlus { count, seed } => {
                 let mut rng = rng_from_seed(*seed);
-                let (pts_t, m) = subsample_standardised(train, &self.fm.standardiser, config.centre_subsample, &mut rng);
+                let (pts_t, m) = subsample_standardised(
+                    train,
+                    &self.fm.standardiser,
+                    config.centre_subsample,
+                    &mut rng,
+                );
                 let centres = kmeanspp(&pts_t, m, d, &self.fm.nodes.centres, *count, &mut rng);
                 let mut all = self.fm.nodes.centres.clone();
                 all.extend_from_slice(&centres);
-                let widths = compute_widths(&all, d, self.n_nodes(), &self.fm.nodes.widths, &config.widths);
-                NodeSet { dim: d, centres, widths }
+                let widths = compute_widths(
+                    &all,
+                    d,
+                    self.n_nodes(),
+                    &self.fm.nodes.widths,
+                    &config.widths,
+                );
+                NodeSet {
+                    dim: d,
+                    centres,
+                    widths,
+                }
             }
         };
         let k = new_nodes.len();
         let centres_s = t0.elapsed().as_secs_f64();
         if k == 0 {
-            let train_e = train_nrmse(state, MatRef::from_row_major_slice(&self.w, self.pattern_width(), self.d_out));
-            return Ok(GrowthReport { nodes_added: 0, nodes: self.n_nodes(), centres_s, cross_terms_s: 0.0, solve_s: 0.0, total_s: t0.elapsed().as_secs_f64(), train_nrmse: train_e });
+            let train_e = train_nrmse(
+                state,
+                MatRef::from_row_major_slice(&self.w, self.pattern_width(), self.d_out),
+            );
+            return Ok(GrowthReport {
+                nodes_added: 0,
+                nodes: self.n_nodes(),
+                centres_s,
+                cross_terms_s: 0.0,
+                solve_s: 0.0,
+                total_s: t0.elapsed().as_secs_f64(),
+                train_nrmse: train_e,
+            });
         }
         let mut all_nodes = self.fm.nodes.clone();
         all_nodes.extend(&new_nodes);
-        let fm = FeatureMap::new(self.fm.standardiser.clone(), self.fm.friction.clone(), all_nodes);
+        let fm = FeatureMap::new(
+            self.fm.standardiser.clone(),
+            self.fm.friction.clone(),
+            all_nodes,
+        );
 
         let t = Instant::now();
-        let (rows, aty_new) = accumulate_new_rows(&fm, train, k, config.block_rows, threads, config.gram_strategy);
+        let (rows, aty_new) = accumulate_new_rows(
+            &fm,
+            train,
+            k,
+            config.block_rows,
+            threads,
+            config.gram_strategy,
+        );
         let cross_terms_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
         let p_old = self.pattern_width();
         let p = p_old + k;
-        let chol = extend_factor(state.chol.as_ref(), rows.as_ref(), self.lambda, par)
-            .ok_or(BroadError::NotPositiveDefinite { tried: vec![self.lambda] })?;
+        let chol = extend_factor(state.chol.as_ref(), rows.as_ref(), self.lambda, par).ok_or(
+            BroadError::NotPositiveDefinite {
+                tried: vec![self.lambda],
+            },
+        )?;
         let mut gram = Mat::<f64>::zeros(p, p);
-        gram.as_mut().submatrix_mut(0, 0, p_old, p_old).copy_from(&state.gram);
+        gram.as_mut()
+            .submatrix_mut(0, 0, p_old, p_old)
+            .copy_from(&state.gram);
         gram.as_mut().submatrix_mut(p_old, 0, k, p).copy_from(&rows);
         let mut aty = Mat::<f64>::zeros(p, self.d_out);
-        aty.as_mut().submatrix_mut(0, 0, p_old, self.d_out).copy_from(&state.aty);
-        aty.as_mut().submatrix_mut(p_old, 0, k, self.d_out).copy_from(&aty_new);
+        aty.as_mut()
+            .submatrix_mut(0, 0, p_old, self.d_out)
+            .copy_from(&state.aty);
+        aty.as_mut()
+            .submatrix_mut(p_old, 0, k, self.d_out)
+            .copy_from(&aty_new);
         let w = solve(chol.as_ref(), aty.as_ref(), par);
-        let new_state = GrowthState { gram, aty, chol, n_samples: state.n_samples, y_sum: state.y_sum.clone(), y_sq: state.y_sq.clone() };
+        let new_state = GrowthState {
+            gram,
+            aty,
+            chol,
+            n_samples: state.n_samples,
+            y_sum: state.y_sum.clone(),
+            y_sq: state.y_sq.clone(),
+        };
         let train_e = train_nrmse(&new_state, w.as_ref());
         let solve_s = t.elapsed().as_secs_f64();
 
@@ -636,7 +807,11 @@ impl BroadModel {
         })
     }
 
-    fn check_training_data(&self, train: &Dataset<'_>, state: &GrowthState) -> Result<(), BroadError> {
+    fn check_training_data(
+        &self,
+        train: &Dataset<'_>,
+        state: &GrowthState,
+    ) -> Result<(), BroadError> {
         if train.n_samples() != state.n_samples {
             return Err(BroadError::GrowthDataMismatch(format!(
                 "{} rows, the model was trained on {}",
@@ -645,9 +820,17 @@ impl BroadModel {
             )));
         }
         let now = Standardiser::from_data(train);
-        for (k, ((a, b), s)) in now.mean.iter().zip(&self.fm.standardiser.mean).zip(&self.fm.standardiser.std).enumerate() {
+        for (k, ((a, b), s)) in now
+            .mean
+            .iter()
+            .zip(&self.fm.standardiser.mean)
+            .zip(&self.fm.standardiser.std)
+            .enumerate()
+        {
             if (a - b).abs() > 1e-9 * (s + b.abs()) {
-                return Err(BroadError::GrowthDataMismatch(format!("mean of input column {k} is {a}, training mean was {b}")));
+                return Err(BroadError::GrowthDataMismatch(format!(
+                    "mean of input column {k} is {a}, training mean was {b}"
+                )));
             }
         }
         let d_out = self.d_out;
@@ -660,7 +843,9 @@ impl BroadModel {
         for (o, (a, b)) in y_sum.iter().zip(&state.y_sum).enumerate() {
             let scale = (state.y_sq[o] * state.n_samples as f64).sqrt();
             if (a - b).abs() > 1e-9 * scale.max(1e-300) {
-                return Err(BroadError::GrowthDataMismatch(format!("sum of target column {o} is {a}, training sum was {b}")));
+                return Err(BroadError::GrowthDataMismatch(format!(
+                    "sum of target column {o} is {a}, training sum was {b}"
+                )));
             }
         }
         Ok(())

@@ -36,9 +36,20 @@ pub(crate) fn cholesky_lower_in_place(m: &mut Mat<f64>, par: Par) -> bool {
     if p == 0 {
         return true;
     }
-    let mut buf = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(p, par, Default::default()));
+    let mut buf = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(
+        p,
+        par,
+        Default::default(),
+    ));
     let stack = MemStack::new(&mut buf);
-    let ok = llt::factor::cholesky_in_place(m.as_mut(), Default::default(), par, stack, Default::default()).is_ok();
+    let ok = llt::factor::cholesky_in_place(
+        m.as_mut(),
+        Default::default(),
+        par,
+        stack,
+        Default::default(),
+    )
+    .is_ok();
     if !ok {
         return false;
     }
@@ -64,7 +75,11 @@ pub(crate) fn cholesky_lower_in_place(m: &mut Mat<f64>, par: Par) -> bool {
 /// Solves `L L^T X = rhs` with the lower factor L.
 pub(crate) fn solve(l: MatRef<'_, f64>, rhs: MatRef<'_, f64>, par: Par) -> Mat<f64> {
     let mut x = rhs.to_owned();
-    let mut buf = MemBuffer::new(llt::solve::solve_in_place_scratch::<f64>(l.nrows(), x.ncols(), par));
+    let mut buf = MemBuffer::new(llt::solve::solve_in_place_scratch::<f64>(
+        l.nrows(),
+        x.ncols(),
+        par,
+    ));
     let stack = MemStack::new(&mut buf);
     llt::solve::solve_in_place(l, x.as_mut(), par, stack);
     x
@@ -75,7 +90,12 @@ pub(crate) fn solve(l: MatRef<'_, f64>, rhs: MatRef<'_, f64>, par: Par) -> Mat<f
 /// all regularised): `L21 = G21 L11^-T`, `L22 = chol(G22 + lambda I - L21 L21^T)`.
 /// `new_rows` is `[G21 | G22]`, k x (P + k) (only the lower triangle of G22 is read).
 /// Cost O(P^2 k) instead of O((P + k)^3) for a new factorisation.
-pub(crate) fn extend_factor(l11: MatRef<'_, f64>, new_rows: MatRef<'_, f64>, lambda: f64, par: Par) -> Option<Mat<f64>> {
+pub(crate) fn extend_factor(
+    l11: MatRef<'_, f64>,
+    new_rows: MatRef<'_, f64>,
+    lambda: f64,
+    par: Par,
+) -> Option<Mat<f64>> {
     let p = l11.nrows();
     let k = new_rows.nrows();
     let pp = p + k;
@@ -84,7 +104,9 @@ pub(crate) fn extend_factor(l11: MatRef<'_, f64>, new_rows: MatRef<'_, f64>, lam
     // L21^T = L11^-1 G21^T  (P x k).
     let mut l21t = new_rows.subcols(0, p).transpose().to_owned();
     solve_lower_triangular_in_place(l11, l21t.as_mut(), par);
-    l.as_mut().submatrix_mut(p, 0, k, p).copy_from(l21t.transpose());
+    l.as_mut()
+        .submatrix_mut(p, 0, k, p)
+        .copy_from(l21t.transpose());
     // S = G22 + lambda I - L21 L21^T (lower triangle).
     let mut s = Mat::<f64>::zeros(k, k);
     for j in 0..k {
@@ -113,7 +135,12 @@ pub(crate) fn extend_factor(l11: MatRef<'_, f64>, new_rows: MatRef<'_, f64>, lam
 
 /// `sum_o` of `||y_o - A w_o||^2` from the Gram terms, per output:
 /// `y^T y - 2 w^T A^T y + w^T G w` (G lower triangle only).
-pub(crate) fn sse_from_gram(g_lower: MatRef<'_, f64>, aty: MatRef<'_, f64>, y_sq: &[f64], w: MatRef<'_, f64>) -> Vec<f64> {
+pub(crate) fn sse_from_gram(
+    g_lower: MatRef<'_, f64>,
+    aty: MatRef<'_, f64>,
+    y_sq: &[f64],
+    w: MatRef<'_, f64>,
+) -> Vec<f64> {
     let p = g_lower.nrows();
     // G w with G symmetric from its lower triangle.
     let mut gw = Mat::<f64>::zeros(p, w.ncols());
@@ -149,9 +176,19 @@ mod tests {
     use faer::linalg::matmul::matmul;
 
     fn spd(p: usize, seed: u64) -> Mat<f64> {
-        let a = Mat::<f64>::from_fn(p + 5, p, |i, j| (((i * 31 + j * 17 + seed as usize) % 23) as f64 - 11.0) / 7.0 + if i == j { 2.0 } else { 0.0 });
+        let a = Mat::<f64>::from_fn(p + 5, p, |i, j| {
+            (((i * 31 + j * 17 + seed as usize) % 23) as f64 - 11.0) / 7.0
+                + if i == j { 2.0 } else { 0.0 }
+        });
         let mut g = Mat::<f64>::zeros(p, p);
-        matmul(g.as_mut(), Accum::Replace, a.transpose(), a.as_ref(), 1.0, Par::Seq);
+        matmul(
+            g.as_mut(),
+            Accum::Replace,
+            a.transpose(),
+            a.as_ref(),
+            1.0,
+            Par::Seq,
+        );
         g
     }
 
@@ -179,7 +216,14 @@ mod tests {
         assert_eq!(l1, l2);
         // L L^T = G + 0.5 D with D[3,3] = 0.
         let mut llt = Mat::<f64>::zeros(9, 9);
-        matmul(llt.as_mut(), Accum::Replace, l1.as_ref(), l1.transpose(), 1.0, Par::Seq);
+        matmul(
+            llt.as_mut(),
+            Accum::Replace,
+            l1.as_ref(),
+            l1.transpose(),
+            1.0,
+            Par::Seq,
+        );
         let mut expect = g.clone();
         for i in 0..9 {
             if i != 3 {
@@ -216,10 +260,26 @@ mod tests {
         let y = Mat::<f64>::from_fn(30, 2, |i, j| (i as f64 * 0.1 + j as f64).sin());
         let w = Mat::<f64>::from_fn(4, 2, |i, j| 0.1 * (i as f64) - 0.2 * j as f64);
         let mut g = Mat::<f64>::zeros(4, 4);
-        matmul(g.as_mut(), Accum::Replace, a.transpose(), a.as_ref(), 1.0, Par::Seq);
+        matmul(
+            g.as_mut(),
+            Accum::Replace,
+            a.transpose(),
+            a.as_ref(),
+            1.0,
+            Par::Seq,
+        );
         let mut aty = Mat::<f64>::zeros(4, 2);
-        matmul(aty.as_mut(), Accum::Replace, a.transpose(), y.as_ref(), 1.0, Par::Seq);
-        let y_sq: Vec<f64> = (0..2).map(|o| (0..30).map(|i| y[(i, o)] * y[(i, o)]).sum()).collect();
+        matmul(
+            aty.as_mut(),
+            Accum::Replace,
+            a.transpose(),
+            y.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        let y_sq: Vec<f64> = (0..2)
+            .map(|o| (0..30).map(|i| y[(i, o)] * y[(i, o)]).sum())
+            .collect();
         let sse = sse_from_gram(g.as_ref(), aty.as_ref(), &y_sq, w.as_ref());
         for o in 0..2 {
             let direct: f64 = (0..30)

@@ -19,7 +19,11 @@ pub fn data(rows: usize, seed: u64, noise: f64) -> (Vec<f64>, Vec<f64>) {
     let mut x = Vec::with_capacity(rows * 3);
     let mut y = Vec::with_capacity(rows * 2);
     for _ in 0..rows {
-        let r: [f64; 3] = [rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0)];
+        let r: [f64; 3] = [
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+        ];
         let t = target(&r);
         x.extend_from_slice(&r);
         y.push(t[0] + noise * rng.random_range(-1.0..1.0));
@@ -46,7 +50,12 @@ pub fn small_config(nodes: usize) -> BroadConfig {
 /// Relative Frobenius difference ||a - b|| / ||b||.
 pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
-    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+    let num: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
     let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
     num / den.max(1e-300)
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 
-use super::runner::{run_variant, RunOptions, VariantRun};
+use super::runner::{run_variant, RunOptions, TimeSeries, VariantRun};
 use super::source::{ScenarioError, ScenarioSource};
 
 /// Version of the run-folder format (`summary.json`'s `format_version`).
@@ -44,16 +44,25 @@ pub enum RunError {
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
-    move |source| RunError::Io { path: path.display().to_string(), source }
+    move |source| RunError::Io {
+        path: path.display().to_string(),
+        source,
+    }
 }
 
-/// Writes a time series as CSV (header row, then one row per sample).
+/// Writes a variant's time series as CSV (header row, then one row per sample).
 pub fn write_csv(path: &Path, run: &VariantRun) -> Result<(), RunError> {
+    write_series_csv(path, &run.series)
+}
+
+/// Writes any time series as CSV (header row, then one row per sample; shortest
+/// round-trip decimal form of every value).
+pub fn write_series_csv(path: &Path, series: &TimeSeries) -> Result<(), RunError> {
     let file = std::fs::File::create(path).map_err(io_err(path))?;
     let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{}", run.series.columns.join(",")).map_err(io_err(path))?;
+    writeln!(w, "{}", series.columns.join(",")).map_err(io_err(path))?;
     let mut line = String::new();
-    for row in &run.series.rows {
+    for row in &series.rows {
         line.clear();
         for (k, v) in row.iter().enumerate() {
             if k > 0 {
@@ -77,7 +86,11 @@ fn fmt_metric(v: &Value) -> String {
             }
         }
         Value::Array(a) => a.iter().map(fmt_metric).collect::<Vec<_>>().join(", "),
-        Value::Object(o) => o.iter().map(|(k, v)| format!("{k}: {}", fmt_metric(v))).collect::<Vec<_>>().join(", "),
+        Value::Object(o) => o
+            .iter()
+            .map(|(k, v)| format!("{k}: {}", fmt_metric(v)))
+            .collect::<Vec<_>>()
+            .join(", "),
         other => other.to_string(),
     }
 }
@@ -85,7 +98,13 @@ fn fmt_metric(v: &Value) -> String {
 fn report(scenario: &str, description: &str, runs: &[VariantRun]) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# Scenario `{scenario}`\n\n{description}\n");
-    let _ = writeln!(out, "Joints: {}\n", runs.first().map(|r| r.joints.join(", ")).unwrap_or_default());
+    let _ = writeln!(
+        out,
+        "Joints: {}\n",
+        runs.first()
+            .map(|r| r.joints.join(", "))
+            .unwrap_or_default()
+    );
     let mut keys: Vec<&String> = Vec::new();
     for r in runs {
         for k in r.metrics.keys() {
@@ -94,13 +113,26 @@ fn report(scenario: &str, description: &str, runs: &[VariantRun]) -> String {
             }
         }
     }
-    let _ = writeln!(out, "| metric | {} |", runs.iter().map(|r| format!("`{}`", r.name)).collect::<Vec<_>>().join(" | "));
+    let _ = writeln!(
+        out,
+        "| metric | {} |",
+        runs.iter()
+            .map(|r| format!("`{}`", r.name))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
     let _ = writeln!(out, "|---|{}", "---|".repeat(runs.len()));
     for k in keys {
-        let cells: Vec<String> = runs.iter().map(|r| r.metrics.get(k).map(fmt_metric).unwrap_or_default()).collect();
+        let cells: Vec<String> = runs
+            .iter()
+            .map(|r| r.metrics.get(k).map(fmt_metric).unwrap_or_default())
+            .collect();
         let _ = writeln!(out, "| {k} | {} |", cells.join(" | "));
     }
-    let _ = writeln!(out, "\nTime series: `<variant>.csv` beside this file (columns in docs/outputs.md).");
+    let _ = writeln!(
+        out,
+        "\nTime series: `<variant>.csv` beside this file (columns in docs/outputs.md)."
+    );
     out
 }
 
@@ -138,34 +170,64 @@ pub fn run_scenario(
         runs.push(run_variant(&source, path, v.as_deref(), options)?);
     }
 
-    let parent = out_dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let parent = out_dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(io_err(parent))?;
-    let leaf = out_dir.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
+    let leaf = out_dir
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "run".into());
     let partial = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&partial);
     std::fs::create_dir_all(&partial).map_err(io_err(&partial))?;
 
-    let mut variants = serde_json::Map::new();
-    for run in &runs {
-        write_csv(&partial.join(format!("{}.csv", run.name)), run)?;
-        let metrics: serde_json::Map<String, Value> = run.metrics.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-        variants.insert(run.name.clone(), Value::Object(metrics));
-    }
-    let summary = json!({
-        "format": "admittance-run",
-        "format_version": RUN_FORMAT_VERSION,
-        "scenario": scenario_name,
-        "joints": runs.first().map(|r| r.joints.clone()).unwrap_or_default(),
-        "variants": Value::Object(variants),
-    });
-    let scenario_copy = partial.join("scenario.toml");
-    std::fs::write(&scenario_copy, source.text()).map_err(io_err(&scenario_copy))?;
-    let report_path = partial.join("report.md");
-    std::fs::write(&report_path, report(&scenario_name, &description, &runs)).map_err(io_err(&report_path))?;
-    // summary.json last: its presence marks a complete folder.
-    let summary_path = partial.join("summary.json");
-    let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
+    // Everything is written into the hidden partial folder; on any failure it is removed.
+    let written = (|| -> Result<Value, RunError> {
+        let mut variants = serde_json::Map::new();
+        for run in &runs {
+            write_csv(&partial.join(format!("{}.csv", run.name)), run)?;
+            if let Some(fm) = &run.free_motion {
+                let name = if runs.len() == 1 {
+                    "free_motion.csv".to_string()
+                } else {
+                    format!("free_motion_{}.csv", run.name)
+                };
+                write_series_csv(&partial.join(name), fm)?;
+            }
+            let metrics: serde_json::Map<String, Value> = run
+                .metrics
+                .iter()
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect();
+            variants.insert(run.name.clone(), Value::Object(metrics));
+        }
+        let summary = json!({
+            "format": "admittance-run",
+            "format_version": RUN_FORMAT_VERSION,
+            "scenario": scenario_name,
+            "joints": runs.first().map(|r| r.joints.clone()).unwrap_or_default(),
+            "variants": Value::Object(variants),
+        });
+        let scenario_copy = partial.join("scenario.toml");
+        std::fs::write(&scenario_copy, source.text()).map_err(io_err(&scenario_copy))?;
+        let report_path = partial.join("report.md");
+        std::fs::write(&report_path, report(&scenario_name, &description, &runs))
+            .map_err(io_err(&report_path))?;
+        // summary.json last: its presence marks a complete folder.
+        let summary_path = partial.join("summary.json");
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
+        Ok(summary)
+    })();
+    let summary = match written {
+        Ok(summary) => summary,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&partial);
+            return Err(e);
+        }
+    };
 
     let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
     if out_dir.exists() {
@@ -173,5 +235,10 @@ pub fn run_scenario(
     }
     std::fs::rename(&partial, out_dir).map_err(io_err(out_dir))?;
     let _ = std::fs::remove_dir_all(&old);
-    Ok(RunSummary { scenario: scenario_name, json: summary, variants: runs, out_dir: out_dir.to_path_buf() })
+    Ok(RunSummary {
+        scenario: scenario_name,
+        json: summary,
+        variants: runs,
+        out_dir: out_dir.to_path_buf(),
+    })
 }

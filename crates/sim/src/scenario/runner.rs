@@ -8,8 +8,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use admittance_control::{
-    true_lumped_f, Admittance, AdmittanceInput, ComputedTorqueController, ControlInput, Controller, GrowthRequest,
-    NetworkId, NeuralController, PdController, StepStatus,
+    true_lumped_f, Admittance, AdmittanceInput, ComputedTorqueController, ControlInput, Controller,
+    GrowthRequest, MomentumObserver, NetworkId, NeuralController, Observer, ObserverInput,
+    PdController, StepStatus,
 };
 use admittance_dynamics::{forward_kinematics, Data, Model};
 use serde_json::{json, Value};
@@ -52,6 +53,9 @@ pub struct VariantRun {
     pub series: TimeSeries,
     /// Joint names in chain order.
     pub joints: Vec<String>,
+    /// The free-motion recording (`[record] free_motion_csv = true`): one row per control
+    /// sample, columns `t, q.*, qdot.*, qddot.*, tau.*` (docs/outputs.md).
+    pub free_motion: Option<TimeSeries>,
 }
 
 /// A controller of any kind, keeping the neural one reachable for its node hooks.
@@ -99,7 +103,11 @@ struct JointStats {
 
 impl JointStats {
     fn new(n: usize) -> Self {
-        Self { sum_sq: vec![0.0; n], max_abs: vec![0.0; n], count: 0 }
+        Self {
+            sum_sq: vec![0.0; n],
+            max_abs: vec![0.0; n],
+            count: 0,
+        }
     }
     fn add(&mut self, values: impl Iterator<Item = f64>) {
         for (i, v) in values.enumerate() {
@@ -109,16 +117,142 @@ impl JointStats {
         self.count += 1;
     }
     fn rms(&self) -> Vec<f64> {
-        self.sum_sq.iter().map(|s| if self.count > 0 { (s / self.count as f64).sqrt() } else { 0.0 }).collect()
+        self.sum_sq
+            .iter()
+            .map(|s| {
+                if self.count > 0 {
+                    (s / self.count as f64).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 }
 
+/// Accumulators of the observer metrics (docs/outputs.md).
+struct ObserverStats {
+    /// Per joint: squared estimate error while in contact (`tau_ext != 0` on that joint).
+    contact_err_sq: Vec<f64>,
+    /// Per joint: squared true torque while in contact.
+    contact_true_sq: Vec<f64>,
+    /// Per joint: squared estimate and count where the true torque is zero.
+    free_sq: Vec<f64>,
+    free_count: Vec<usize>,
+    /// Per joint: squared `q_r - q_r(oracle)`.
+    adm_err_sq: Vec<f64>,
+    count: usize,
+    /// Samples x joints with `q_r` outside its saturation bound (whole run).
+    bound_violations: usize,
+}
+
+impl ObserverStats {
+    fn new(n: usize) -> Self {
+        Self {
+            contact_err_sq: vec![0.0; n],
+            contact_true_sq: vec![0.0; n],
+            free_sq: vec![0.0; n],
+            free_count: vec![0; n],
+            adm_err_sq: vec![0.0; n],
+            count: 0,
+            bound_violations: 0,
+        }
+    }
+    fn add(&mut self, estimate: &[f64], truth: &[f64], q_r: &[f64], q_r_oracle: Option<&[f64]>) {
+        for i in 0..estimate.len() {
+            if truth[i] != 0.0 {
+                self.contact_err_sq[i] += (estimate[i] - truth[i]).powi(2);
+                self.contact_true_sq[i] += truth[i] * truth[i];
+            } else {
+                self.free_sq[i] += estimate[i] * estimate[i];
+                self.free_count[i] += 1;
+            }
+        }
+        if let Some(o) = q_r_oracle {
+            for i in 0..q_r.len() {
+                self.adm_err_sq[i] += (q_r[i] - o[i]).powi(2);
+            }
+        }
+        self.count += 1;
+    }
+    fn insert(&self, metrics: &mut BTreeMap<String, Value>, with_admittance: bool) {
+        let err: f64 = self.contact_err_sq.iter().sum();
+        let truth: f64 = self.contact_true_sq.iter().sum();
+        metrics.insert(
+            "external_torque_nrmse".into(),
+            if truth > 0.0 {
+                json!((err / truth).sqrt())
+            } else {
+                Value::Null
+            },
+        );
+        let free: Vec<f64> = self
+            .free_sq
+            .iter()
+            .zip(&self.free_count)
+            .map(|(s, c)| if *c > 0 { (s / *c as f64).sqrt() } else { 0.0 })
+            .collect();
+        metrics.insert("false_torque_rms".into(), json!(free));
+        metrics.insert(
+            "reference_bound_violations".into(),
+            json!(self.bound_violations),
+        );
+        if with_admittance {
+            let rms: Vec<f64> = self
+                .adm_err_sq
+                .iter()
+                .map(|s| (s / self.count.max(1) as f64).sqrt())
+                .collect();
+            metrics.insert("admittance_error_rms".into(), json!(rms));
+        }
+    }
+}
+
+/// A controller or admittance configuration error, located at its key in the scenario
+/// (`k2[1]` of `[controller.neural]` is written at `controller.neural.k2`).
+fn located_config_error(
+    source: &ScenarioSource,
+    variant: Option<&str>,
+    section: &str,
+    e: &admittance_control::ConfigError,
+) -> ScenarioError {
+    let key: String = e.key.split('[').next().unwrap_or("").to_string();
+    let path = if key.is_empty() {
+        section.to_string()
+    } else {
+        format!("{section}.{key}")
+    };
+    let hint =
+        Some("change the value so that it meets the stated bound (the file or --set)".to_string());
+    let mut err = source.error_at(&path, variant, e.message.clone(), hint);
+    if e.key.contains('[') {
+        err.key = Some(format!("{section}.{}", e.key));
+    }
+    err
+}
+
 /// Resolves, validates and runs one variant of a scenario file.
-pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, options: &RunOptions) -> Result<VariantRun, ScenarioError> {
+pub fn run_variant(
+    source: &ScenarioSource,
+    path: &Path,
+    variant: Option<&str>,
+    options: &RunOptions,
+) -> Result<VariantRun, ScenarioError> {
     let scenario: Scenario = source.resolve(variant)?;
     let urdf = scenario.urdf_path(path);
-    let model = Model::from_urdf_file(&urdf, scenario.arm.base.as_deref(), scenario.arm.tip.as_deref())
-        .map_err(|e| source.error_at("arm.urdf", variant, e.to_string(), Some("the path is relative to the scenario file".into())))?;
+    let model = Model::from_urdf_file(
+        &urdf,
+        scenario.arm.base.as_deref(),
+        scenario.arm.tip.as_deref(),
+    )
+    .map_err(|e| {
+        source.error_at(
+            "arm.urdf",
+            variant,
+            e.to_string(),
+            Some("the path is relative to the scenario file".into()),
+        )
+    })?;
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
     let problems = scenario.validate(&joints);
     if !problems.is_empty() {
@@ -140,35 +274,100 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
     }
     let sim_err = |e: crate::SimError| source.error_at("plant", variant, e.to_string(), None);
     let mut plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
-    let mut sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz).map_err(sim_err)?;
+    let mut sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
+        .map_err(sim_err)?;
     let dt = plant.control_dt();
 
     let nominal = Arc::new(model.clone());
     let ctrl_err = |e: admittance_control::ConfigError, section: &str| {
-        let text = e.to_string();
-        source.error_at(&format!("controller.{section}"), variant, text, None)
+        located_config_error(source, variant, &format!("controller.{section}"), &e)
     };
     let mut controller = match scenario.controller.kind {
         ControllerKind::Neural => AnyController::Neural(Box::new(
-            NeuralController::new(nominal.clone(), &scenario.controller.neural).map_err(|e| ctrl_err(e, "neural"))?,
+            NeuralController::new(nominal.clone(), &scenario.controller.neural)
+                .map_err(|e| ctrl_err(e, "neural"))?,
         )),
         ControllerKind::Pd => {
             let cfg = scenario.controller.pd.as_ref().expect("validated");
-            AnyController::Other(Box::new(PdController::new(nominal.clone(), cfg).map_err(|e| ctrl_err(e, "pd"))?))
+            AnyController::Other(Box::new(
+                PdController::new(nominal.clone(), cfg).map_err(|e| ctrl_err(e, "pd"))?,
+            ))
         }
         ControllerKind::ComputedTorque => {
-            let cfg = scenario.controller.computed_torque.as_ref().expect("validated");
+            let cfg = scenario
+                .controller
+                .computed_torque
+                .as_ref()
+                .expect("validated");
             AnyController::Other(Box::new(
-                ComputedTorqueController::new(nominal.clone(), cfg).map_err(|e| ctrl_err(e, "computed_torque"))?,
+                ComputedTorqueController::new(nominal.clone(), cfg)
+                    .map_err(|e| ctrl_err(e, "computed_torque"))?,
             ))
         }
     };
     let mut admittance = match &scenario.admittance {
         Some(spec) if spec.enabled => Some(
-            Admittance::new(n, &spec.config).map_err(|e| source.error_at("admittance", variant, e.to_string(), None))?,
+            Admittance::new(n, &spec.config)
+                .map_err(|e| located_config_error(source, variant, "admittance", &e))?,
         ),
         _ => None,
     };
+
+    // The external-torque observer (METHOD.md section 5).
+    let mut observer: Option<Box<dyn Observer>> = match scenario.observer.kind {
+        ObserverKind::None | ObserverKind::Oracle => None,
+        ObserverKind::Momentum => {
+            let scaled = model
+                .with_scaled_inertias(scenario.observer.nominal_inertia_scale)
+                .map_err(|e| {
+                    source.error_at(
+                        "observer.nominal_inertia_scale",
+                        variant,
+                        e.to_string(),
+                        None,
+                    )
+                })?;
+            Some(Box::new(
+                MomentumObserver::new(Arc::new(scaled), &scenario.observer.momentum).map_err(
+                    |e| {
+                        source.error_at(
+                            &format!("observer.momentum.{}", e.key),
+                            variant,
+                            e.message,
+                            None,
+                        )
+                    },
+                )?,
+            ))
+        }
+    };
+    // First-order low-pass of the estimate: alpha = dt / (dt + 1 / (2 pi f_c)).
+    let estimate_alpha = if scenario.observer.cutoff_hz > 0.0 {
+        dt / (dt + 1.0 / (2.0 * std::f64::consts::PI * scenario.observer.cutoff_hz))
+    } else {
+        1.0
+    };
+    let mut estimate_raw = vec![0.0; n];
+    let mut observer_faults = 0usize;
+    let mut oracle_admittance = match &scenario.admittance {
+        Some(spec) if spec.enabled => Some(
+            Admittance::new(n, &spec.config)
+                .map_err(|e| located_config_error(source, variant, "admittance", &e))?,
+        ),
+        _ => None,
+    };
+    let mut observer_stats = ObserverStats::new(n);
+    let mut free_motion = scenario.record.free_motion_csv.then(|| {
+        let mut columns = vec!["t".to_string()];
+        for prefix in ["q", "qdot", "qddot", "tau"] {
+            columns.extend(joints.iter().map(|j| format!("{prefix}.{j}")));
+        }
+        TimeSeries {
+            columns,
+            rows: Vec::new(),
+        }
+    });
+    let mut tau_filtered_prev = vec![0.0; n];
 
     let effort: Vec<f64> = plant.effort_limits().to_vec();
     let mut kin_data = Data::new(plant.model());
@@ -186,7 +385,17 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
     let decimation = scenario.output.decimation;
     let mut series = TimeSeries::default();
     series.columns.push("t".into());
-    for prefix in ["q_d", "q_r", "q", "qdot", "q_meas", "tau_cmd", "tau_applied", "tau_ext", "tau_ext_hat"] {
+    for prefix in [
+        "q_d",
+        "q_r",
+        "q",
+        "qdot",
+        "q_meas",
+        "tau_cmd",
+        "tau_applied",
+        "tau_ext",
+        "tau_ext_hat",
+    ] {
         for j in &joints {
             series.columns.push(format!("{prefix}.{j}"));
         }
@@ -232,14 +441,61 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
             qdot_meas.copy_from_slice(&m.qdot);
         }
         // External-torque estimate.
-        match scenario.observer.kind {
-            ObserverKind::None => estimate.fill(0.0),
-            ObserverKind::Oracle => estimate.copy_from_slice(plant.tau_ext()),
+        match observer.as_mut() {
+            None => match scenario.observer.kind {
+                ObserverKind::Oracle => estimate.copy_from_slice(plant.tau_ext()),
+                _ => estimate.fill(0.0),
+            },
+            Some(obs) => {
+                // What the sensors saw: the filtered angles with their derivatives and the
+                // command through the same filter (matching delays, METHOD.md section 7).
+                let m = sensors.measurement();
+                let input = ObserverInput {
+                    time: t,
+                    q: &m.q_filtered,
+                    qdot: &m.qdot,
+                    qddot: &m.qddot,
+                    tau_commanded: &m.tau_filtered,
+                };
+                if !obs.update(&input, dt, &mut estimate_raw).is_ok() {
+                    observer_faults += 1;
+                }
+                for (e, r) in estimate.iter_mut().zip(&estimate_raw) {
+                    *e += estimate_alpha * (r - *e);
+                }
+            }
+        }
+        // Free-motion data: what the sensors saw, with the filtered command delayed by one
+        // sample to match qddot's delay (METHOD.md section 7, docs/outputs.md).
+        if let Some(fm) = free_motion.as_mut() {
+            let m = sensors.measurement();
+            let mut row = Vec::with_capacity(1 + 4 * n);
+            row.push(t);
+            for v in [&m.q_filtered[..], &m.qdot, &m.qddot, &tau_filtered_prev] {
+                row.extend_from_slice(v);
+            }
+            fm.rows.push(row);
+            tau_filtered_prev.copy_from_slice(&m.tau_filtered);
+        }
+        // The oracle's admittance model, run beside the variant's (admittance_error_rms).
+        if let Some(adm) = oracle_admittance.as_mut() {
+            let input = AdmittanceInput {
+                q_d: &q_d,
+                qdot_d: &qd_d,
+                qddot_d: &qdd_d,
+                external_torque_estimate: plant.tau_ext(),
+            };
+            let _ = adm.step(&input, dt);
         }
         // Compliant reference.
         match admittance.as_mut() {
             Some(adm) => {
-                let input = AdmittanceInput { q_d: &q_d, qdot_d: &qd_d, qddot_d: &qdd_d, external_torque_estimate: &estimate };
+                let input = AdmittanceInput {
+                    q_d: &q_d,
+                    qdot_d: &qd_d,
+                    qddot_d: &qdd_d,
+                    external_torque_estimate: &estimate,
+                };
                 let _ = adm.step(&input, dt);
                 q_r.copy_from_slice(adm.q_r());
                 qd_r.copy_from_slice(adm.qdot_r());
@@ -257,8 +513,14 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
                 discarded = Some(nn.discard(NetworkId::F, d.upsilon));
             }
             if !growth_requested && t >= d.grow_time {
-                let request = GrowthRequest { nodes: d.grow_nodes, interval_steps: d.grow_interval_steps, params: d.growth };
-                nn.request_growth(NetworkId::F, request).map_err(|e| source.error_at("dynamic_nodes.growth", variant, e.to_string(), None))?;
+                let request = GrowthRequest {
+                    nodes: d.grow_nodes,
+                    interval_steps: d.grow_interval_steps,
+                    params: d.growth,
+                };
+                nn.request_growth(NetworkId::F, request).map_err(|e| {
+                    source.error_at("dynamic_nodes.growth", variant, e.to_string(), None)
+                })?;
                 growth_requested = true;
             }
         }
@@ -269,7 +531,11 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
             q_ref: &q_r,
             qdot_ref: &qd_r,
             qddot_ref: &qdd_r,
-            external_torque_estimate: if admittance.is_some() { &zeros } else { &estimate },
+            external_torque_estimate: if admittance.is_some() {
+                &zeros
+            } else {
+                &estimate
+            },
         };
         let start = Instant::now();
         let status = controller.as_dyn().step(&input, dt, &mut tau);
@@ -289,7 +555,15 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
         }
         // Approximation of f (experiment C) with the controller's alpha.
         if let (Some(d), Some(nn)) = (&dynamic, controller.neural()) {
-            let _ = true_lumped_f(plant.model(), &mut f_data, plant.q(), plant.qdot(), nn.alpha(), nn.alpha_dot(), &mut f_true);
+            let _ = true_lumped_f(
+                plant.model(),
+                &mut f_data,
+                plant.q(),
+                plant.qdot(),
+                nn.alpha(),
+                nn.alpha_dot(),
+                &mut f_true,
+            );
             let phase_ends = [d.discard_time, d.grow_time, scenario.duration];
             for (p, end) in phase_ends.iter().enumerate() {
                 if t >= end - d.approximation_window && t < *end {
@@ -301,6 +575,14 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
             max_weight_norm = max_weight_norm.max(nn.weight_norm(NetworkId::F));
         }
 
+        if let Some(sat) = admittance.as_ref().and_then(|a| a.saturation()) {
+            for (i, r) in q_r.iter().enumerate() {
+                let (c, h) = (sat.centre()[i], sat.half_range()[i]);
+                if !(*r > c - h && *r < c + h) {
+                    observer_stats.bound_violations += 1;
+                }
+            }
+        }
         plant.step_control(&tau).map_err(sim_err)?;
         let record = plant.record();
         let in_window = t >= scenario.evaluation_start;
@@ -314,6 +596,12 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
             tracking.add(q_r.iter().zip(plant.q()).map(|(r, q)| r - q));
             torque.add(tau.iter().copied());
             estimate_error.add(estimate.iter().zip(&record.tau_ext).map(|(e, t)| e - t));
+            observer_stats.add(
+                &estimate,
+                &record.tau_ext,
+                &q_r,
+                oracle_admittance.as_ref().map(|a| a.q_r()),
+            );
             ee_errors.push(ee_error);
             window_steps += 1;
             for (c, dz) in deadzone_steps.iter_mut().zip(&record.in_deadzone) {
@@ -323,7 +611,17 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
         if k % decimation == 0 {
             let mut row = Vec::with_capacity(series.columns.len());
             row.push(t);
-            for v in [&q_d[..], &q_r, plant.q(), plant.qdot(), &q_meas, &tau, &record.applied, &record.tau_ext, &estimate] {
+            for v in [
+                &q_d[..],
+                &q_r,
+                plant.q(),
+                plant.qdot(),
+                &q_meas,
+                &tau,
+                &record.applied,
+                &record.tau_ext,
+                &estimate,
+            ] {
                 row.extend_from_slice(v);
             }
             row.push(ee_error);
@@ -342,23 +640,37 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
     metrics.insert("tracking_rmse".into(), json!(tracking.rms()));
     metrics.insert("tracking_max_abs".into(), json!(tracking.max_abs));
     metrics.insert("ee_error_rms".into(), json!(rms(&ee_errors)));
-    metrics.insert("ee_error_max".into(), json!(ee_errors.iter().cloned().fold(0.0, f64::max)));
+    metrics.insert(
+        "ee_error_max".into(),
+        json!(ee_errors.iter().cloned().fold(0.0, f64::max)),
+    );
     metrics.insert("torque_rms".into(), json!(torque.rms()));
     metrics.insert("torque_max_abs".into(), json!(torque.max_abs));
-    let fractions: Vec<f64> = deadzone_steps.iter().map(|c| *c as f64 / window_steps.max(1) as f64).collect();
+    let fractions: Vec<f64> = deadzone_steps
+        .iter()
+        .map(|c| *c as f64 / window_steps.max(1) as f64)
+        .collect();
     metrics.insert("deadzone_time_fraction".into(), json!(fractions));
-    metrics.insert("controller_step_median_us".into(), json!(median(&mut step_times)));
+    metrics.insert(
+        "controller_step_median_us".into(),
+        json!(median(&mut step_times)),
+    );
     metrics.insert("faults".into(), json!(faults));
     metrics.insert("torque_limit_violations".into(), json!(limit_violations));
     metrics.insert("nonfinite_torques".into(), json!(nonfinite_torques));
     metrics.insert("steps".into(), json!(steps));
     metrics.insert("external_torque_rmse".into(), json!(estimate_error.rms()));
+    observer_stats.insert(&mut metrics, oracle_admittance.is_some());
+    metrics.insert("observer_faults".into(), json!(observer_faults));
     let mut nodes = serde_json::Map::new();
     if let Some(nn) = controller.neural() {
         for id in nn.network_ids() {
             nodes.insert(id.as_str().into(), json!(nn.node_count(id)));
         }
-        let norms: serde_json::Map<String, Value> = nn.network_ids().map(|id| (id.as_str().to_string(), json!(nn.weight_norm(id)))).collect();
+        let norms: serde_json::Map<String, Value> = nn
+            .network_ids()
+            .map(|id| (id.as_str().to_string(), json!(nn.weight_norm(id))))
+            .collect();
         metrics.insert("weight_norm_final".into(), Value::Object(norms));
     }
     metrics.insert("nodes".into(), Value::Object(nodes));
@@ -367,8 +679,17 @@ pub fn run_variant(source: &ScenarioSource, path: &Path, variant: Option<&str>, 
         metrics.insert("approx_rmse_after_discard".into(), json!(rms(&approx[1])));
         metrics.insert("approx_rmse_after_growth".into(), json!(rms(&approx[2])));
         metrics.insert("nodes_discarded".into(), json!(discarded.unwrap_or(0)));
-        metrics.insert("nodes_added".into(), json!(nn.growth_progress(NetworkId::F).added));
+        metrics.insert(
+            "nodes_added".into(),
+            json!(nn.growth_progress(NetworkId::F).added),
+        );
         metrics.insert("weight_norm_max".into(), json!(max_weight_norm));
     }
-    Ok(VariantRun { name: variant.unwrap_or("base").to_string(), metrics, series, joints })
+    Ok(VariantRun {
+        name: variant.unwrap_or("base").to_string(),
+        metrics,
+        series,
+        joints,
+        free_motion,
+    })
 }

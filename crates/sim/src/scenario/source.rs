@@ -391,12 +391,13 @@ impl ScenarioSource {
     /// message when there are several).
     pub fn invalid(&self, variant: Option<&str>, problems: &[Invalid]) -> ScenarioError {
         let first = &problems[0];
-        let mut err = self.error_at(
-            &first.key,
-            variant,
-            first.message.clone(),
-            first.hint.clone(),
-        );
+        let hint = first.hint.clone().unwrap_or_else(|| {
+            format!(
+                "fix `{}` in the file, or override it with --set {}=VALUE",
+                first.key, first.key
+            )
+        });
+        let mut err = self.error_at(&first.key, variant, first.message.clone(), Some(hint));
         if problems.len() > 1 {
             err.message
                 .push_str(&format!(" (and {} more problems)", problems.len() - 1));
@@ -521,5 +522,9 @@ mod tests {
         );
         let e = src.invalid(None, &[Invalid::new("controller.k1", "bad")]);
         assert_eq!(e.line, Some(4));
+        assert!(
+            e.to_string().ends_with("hint: fix `controller.k1` in the file, or override it with --set controller.k1=VALUE"),
+            "{e}"
+        );
     }
 }

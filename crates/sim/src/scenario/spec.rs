@@ -21,14 +21,18 @@
 //! [plant]                    # admittance_sim::PlantConfig: friction, deadzones, spring, sensors, ...
 //! [controller]               # kind = "neural" | "pd" | "computed_torque", with [controller.neural] etc.
 //! [admittance]               # optional: admittance model and reference saturation
-//! [observer]                 # kind = "none" | "oracle"
+//! [observer]                 # kind = "none" | "oracle" | "momentum", nominal_inertia_scale, cutoff_hz
+//! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [variants.NAME]            # overrides of any of the above, per variant
 //! ```
 
 use std::path::{Path, PathBuf};
 
-use admittance_control::{AdmittanceConfig, ComputedTorqueConfig, GrowthParams, NeuralControllerConfig, PdConfig};
+use admittance_control::{
+    AdmittanceConfig, ComputedTorqueConfig, GrowthParams, MomentumObserverConfig,
+    NeuralControllerConfig, PdConfig,
+};
 use serde::{Deserialize, Serialize};
 
 use super::source::Invalid;
@@ -113,15 +117,44 @@ pub enum ObserverKind {
     None,
     /// The true external torque of the plant (an upper bound for any observer).
     Oracle,
+    /// The generalised-momentum observer with a nominal model (METHOD.md section 5,
+    /// baseline): settings in `[observer.momentum]`, model error in `nominal_inertia_scale`.
+    Momentum,
 }
 
-/// The observer section.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+/// The observer section (`[observer]`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObserverSpec {
     /// The estimate's source.
     #[serde(default)]
     pub kind: ObserverKind,
+    /// The observer's nominal model is the arm's model with every link mass and inertia
+    /// multiplied by this (0.8: a 20% model error). Default 1. Used by `momentum`.
+    #[serde(default = "unit")]
+    pub nominal_inertia_scale: f64,
+    /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
+    /// but `oracle` (METHOD.md sections 5 and 7); 0 disables it. Default 0.
+    #[serde(default)]
+    pub cutoff_hz: f64,
+    /// Settings of the momentum observer.
+    #[serde(default)]
+    pub momentum: MomentumObserverConfig,
+}
+
+impl Default for ObserverSpec {
+    fn default() -> Self {
+        Self {
+            kind: ObserverKind::None,
+            nominal_inertia_scale: 1.0,
+            cutoff_hz: 0.0,
+            momentum: MomentumObserverConfig::default(),
+        }
+    }
+}
+
+fn unit() -> f64 {
+    1.0
 }
 
 /// The admittance section.
@@ -164,6 +197,16 @@ pub struct DynamicNodesSpec {
 
 fn one() -> usize {
     1
+}
+
+/// Extra recordings (`[record]`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordSpec {
+    /// Record what the sensors saw at the control rate, in the free-motion data format
+    /// (METHOD.md section 5; columns in docs/outputs.md), to `free_motion.csv`.
+    #[serde(default)]
+    pub free_motion_csv: bool,
 }
 
 /// What the run writes.
@@ -223,6 +266,9 @@ pub struct Scenario {
     /// Output settings.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Extra recordings.
+    #[serde(default)]
+    pub record: RecordSpec,
     /// Variant tables (read by [`super::ScenarioSource`], ignored here).
     #[serde(default, skip_serializing)]
     pub variants: Option<toml::Table>,
@@ -234,7 +280,10 @@ impl Scenario {
         if self.arm.urdf.is_absolute() {
             self.arm.urdf.clone()
         } else {
-            scenario_file.parent().unwrap_or(Path::new(".")).join(&self.arm.urdf)
+            scenario_file
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join(&self.arm.urdf)
         }
     }
 
@@ -242,18 +291,31 @@ impl Scenario {
     pub fn validate(&self, joints: &[String]) -> Vec<Invalid> {
         let mut out = Vec::new();
         if !(self.duration.is_finite() && self.duration > 0.0) {
-            out.push(Invalid::new("duration", format!("is {}, must be > 0 s", self.duration)));
+            out.push(Invalid::new(
+                "duration",
+                format!("is {}, must be > 0 s", self.duration),
+            ));
         }
         if !(self.evaluation_start >= 0.0 && self.evaluation_start < self.duration) {
             out.push(
-                Invalid::new("evaluation_start", format!("is {}, must be in [0, duration)", self.evaluation_start))
-                    .hint("metrics are computed over [evaluation_start, duration]"),
+                Invalid::new(
+                    "evaluation_start",
+                    format!("is {}, must be in [0, duration)", self.evaluation_start),
+                )
+                .hint("metrics are computed over [evaluation_start, duration]"),
             );
         }
         if self.trajectory.offset.len() != joints.len() {
             out.push(
-                Invalid::new("trajectory.offset", format!("has {} values, the arm has {} joints", self.trajectory.offset.len(), joints.len()))
-                    .hint(format!("one value per joint: {}", joints.join(", "))),
+                Invalid::new(
+                    "trajectory.offset",
+                    format!(
+                        "has {} values, the arm has {} joints",
+                        self.trajectory.offset.len(),
+                        joints.len()
+                    ),
+                )
+                .hint(format!("one value per joint: {}", joints.join(", "))),
             );
         }
         if self.trajectory.offset.iter().any(|v| !v.is_finite()) {
@@ -263,42 +325,107 @@ impl Scenario {
             let key = format!("trajectory.sines.{k}");
             if !joints.contains(&s.joint) {
                 out.push(
-                    Invalid::new(format!("{key}.joint"), format!("unknown joint '{}'", s.joint))
-                        .hint(format!("joints of this arm: {}", joints.join(", "))),
+                    Invalid::new(
+                        format!("{key}.joint"),
+                        format!("unknown joint '{}'", s.joint),
+                    )
+                    .hint(format!("joints of this arm: {}", joints.join(", "))),
                 );
             }
             if !(s.period.is_finite() && s.period > 0.0) {
-                out.push(Invalid::new(format!("{key}.period"), format!("is {}, must be > 0 s", s.period)));
+                out.push(Invalid::new(
+                    format!("{key}.period"),
+                    format!("is {}, must be > 0 s", s.period),
+                ));
             }
             if !s.amplitude.is_finite() || !s.phase.is_finite() {
-                out.push(Invalid::new(key.clone(), "amplitude and phase must be finite"));
+                out.push(Invalid::new(
+                    key.clone(),
+                    "amplitude and phase must be finite",
+                ));
             }
         }
         match self.controller.kind {
-            ControllerKind::Pd if self.controller.pd.is_none() => {
-                out.push(Invalid::new("controller.pd", "kind = \"pd\" needs a [controller.pd] table").hint("give kp and kd"))
-            }
-            ControllerKind::ComputedTorque if self.controller.computed_torque.is_none() => out.push(
-                Invalid::new("controller.computed_torque", "kind = \"computed_torque\" needs a [controller.computed_torque] table"),
+            ControllerKind::Pd if self.controller.pd.is_none() => out.push(
+                Invalid::new(
+                    "controller.pd",
+                    "kind = \"pd\" needs a [controller.pd] table",
+                )
+                .hint("give kp and kd"),
             ),
+            ControllerKind::ComputedTorque if self.controller.computed_torque.is_none() => out
+                .push(Invalid::new(
+                    "controller.computed_torque",
+                    "kind = \"computed_torque\" needs a [controller.computed_torque] table",
+                )),
             _ => {}
         }
         if let Some(d) = &self.dynamic_nodes {
             if self.controller.kind != ControllerKind::Neural {
-                out.push(Invalid::new("dynamic_nodes", "needs controller.kind = \"neural\""));
+                out.push(Invalid::new(
+                    "dynamic_nodes",
+                    "needs controller.kind = \"neural\"",
+                ));
             }
-            if !(d.discard_time > 0.0 && d.discard_time < d.grow_time && d.grow_time < self.duration) {
+            if !(d.discard_time > 0.0
+                && d.discard_time < d.grow_time
+                && d.grow_time < self.duration)
+            {
                 out.push(
-                    Invalid::new("dynamic_nodes.grow_time", "needs 0 < discard_time < grow_time < duration")
-                        .hint("discard first, then grow, before the run ends"),
+                    Invalid::new(
+                        "dynamic_nodes.grow_time",
+                        "needs 0 < discard_time < grow_time < duration",
+                    )
+                    .hint("discard first, then grow, before the run ends"),
                 );
             }
             if !(d.upsilon > 0.0 && d.upsilon < 1.0) {
-                out.push(Invalid::new("dynamic_nodes.upsilon", format!("is {}, must be in (0, 1)", d.upsilon)));
+                out.push(Invalid::new(
+                    "dynamic_nodes.upsilon",
+                    format!("is {}, must be in (0, 1)", d.upsilon),
+                ));
             }
             if !(d.approximation_window > 0.0 && d.approximation_window <= d.discard_time) {
-                out.push(Invalid::new("dynamic_nodes.approximation_window", "must be > 0 and at most discard_time"));
+                out.push(Invalid::new(
+                    "dynamic_nodes.approximation_window",
+                    "must be > 0 and at most discard_time",
+                ));
             }
+            // Each phase's window must lie inside that phase, or the "after discard" error
+            // would mix in samples from before the discard (and likewise for growth).
+            if d.approximation_window > d.grow_time - d.discard_time
+                || d.approximation_window > self.duration - d.grow_time
+            {
+                out.push(
+                    Invalid::new(
+                        "dynamic_nodes.approximation_window",
+                        format!(
+                            "is {} s, longer than a phase (grow_time - discard_time = {} s, duration - grow_time = {} s)",
+                            d.approximation_window,
+                            d.grow_time - d.discard_time,
+                            self.duration - d.grow_time
+                        ),
+                    )
+                    .hint("each phase's error is measured over the last approximation_window seconds of that phase"),
+                );
+            }
+        }
+        if !(self.observer.nominal_inertia_scale.is_finite()
+            && self.observer.nominal_inertia_scale > 0.0)
+        {
+            out.push(Invalid::new(
+                "observer.nominal_inertia_scale",
+                format!("is {}, must be > 0", self.observer.nominal_inertia_scale),
+            ));
+        }
+        if !(self.observer.cutoff_hz.is_finite() && self.observer.cutoff_hz >= 0.0) {
+            out.push(Invalid::new(
+                "observer.cutoff_hz",
+                format!(
+                    "is {}, must be >= 0 (0: no filter)",
+                    self.observer.cutoff_hz
+                ),
+            ));
         }
         if self.output.decimation == 0 {
             out.push(Invalid::new("output.decimation", "must be at least 1"));
@@ -321,10 +448,18 @@ impl Trajectory {
             .iter()
             .filter_map(|s| {
                 let j = joints.iter().position(|n| n == &s.joint)?;
-                Some((j, s.amplitude, 2.0 * std::f64::consts::PI / s.period, s.phase))
+                Some((
+                    j,
+                    s.amplitude,
+                    2.0 * std::f64::consts::PI / s.period,
+                    s.phase,
+                ))
             })
             .collect();
-        Self { offset: spec.offset.clone(), sines }
+        Self {
+            offset: spec.offset.clone(),
+            sines,
+        }
     }
 
     pub(crate) fn eval(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
