@@ -48,7 +48,7 @@ pub struct ModelArgs {
     chain: ChainArgs,
 }
 
-fn load(chain: &ChainArgs) -> Result<Model, CliError> {
+pub fn load(chain: &ChainArgs) -> Result<Model, CliError> {
     Model::from_urdf_file(&chain.urdf, chain.base.as_deref(), chain.tip.as_deref()).map_err(|e| {
         match e {
             DynamicsError::Io { .. } => CliError::usage(e.to_string()),

@@ -9,7 +9,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use admittance_dynamics::Model;
 use admittance_learning::broad::{
     fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec,
 };
@@ -23,15 +22,9 @@ pub struct TrainArgs {
     /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J).
     #[arg(long)]
     data: PathBuf,
-    /// The arm's URDF: the data's joints must be its joints, in chain order.
-    #[arg(long)]
-    urdf: PathBuf,
-    /// Base link of the chain (default: the root link).
-    #[arg(long)]
-    base: Option<String>,
-    /// Tip link of the chain (default: the single leaf).
-    #[arg(long)]
-    tip: Option<String>,
+    /// The arm (`--urdf`, `--base`, `--tip`): the data's joints must be its joints, in chain order.
+    #[command(flatten)]
+    chain: crate::dynamics_cmd::ChainArgs,
     /// Enhancement (Gaussian) nodes L.
     #[arg(long, default_value_t = 1000)]
     nodes: usize,
@@ -120,8 +113,7 @@ fn fmt_list(v: &[f64]) -> String {
 }
 
 pub fn train(args: &TrainArgs) -> Result<(), CliError> {
-    let model = Model::from_urdf_file(&args.urdf, args.base.as_deref(), args.tip.as_deref())
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let model = crate::dynamics_cmd::load(&args.chain)?;
     let (data, x, y, train_rows) = load_split(&args.data, args.validation_fraction)?;
     let joints: Vec<&str> = model.joint_names().collect();
     if data
