@@ -32,7 +32,10 @@ pub struct RunArgs {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
-    let options = RunOptions { seed: args.seed };
+    let options = RunOptions {
+        seed: args.seed,
+        progress: None,
+    };
     let quiet = args.quiet;
     let started = std::time::Instant::now();
     let summary = run_scenario(
@@ -51,9 +54,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
                 );
             }
         },
+        |_| Ok(()),
     )
     .map_err(|e| match e {
         RunError::Scenario(s) => CliError::input(s.to_string()),
+        RunError::Finish(message) => CliError { code: 1, message },
         io @ RunError::Io { .. } => CliError {
             code: 1,
             message: io.to_string(),

@@ -104,6 +104,7 @@ fn free_motion_scenario_writes_a_loadable_file() {
         &["duration=1.5".to_string()],
         &RunOptions::default(),
         |_, _, _| {},
+        |_| Ok(()),
     )
     .unwrap();
     let run = &summary.variants[0];

@@ -7,6 +7,6 @@ pub mod source;
 pub mod spec;
 
 pub use output::{run_scenario, RunSummary};
-pub use runner::{run_variant, RunOptions, TimeSeries, VariantRun};
+pub use runner::{run_variant, Progress, ProgressFn, RunOptions, Stage, TimeSeries, VariantRun};
 pub use source::{Invalid, ScenarioError, ScenarioSource};
 pub use spec::Scenario;

@@ -33,6 +33,9 @@ pub enum RunError {
     /// The scenario is invalid.
     #[error("{0}")]
     Scenario(#[from] ScenarioError),
+    /// A finishing step (report, figures, recording) failed.
+    #[error("{0}")]
+    Finish(String),
     /// Writing the output failed.
     #[error("{path}: {source}")]
     Io {
@@ -136,8 +139,11 @@ fn report(scenario: &str, description: &str, runs: &[VariantRun]) -> String {
     out
 }
 
-/// Runs every variant of the scenario at `path` (or only `only`) and writes the folder
-/// `out_dir`. `configure` may add `--set` overrides to the source before resolution.
+/// Runs every variant of the scenario at `path` (or only `only`) with the `--set`
+/// `overrides` and writes the folder `out_dir`. `progress` is told when each variant starts
+/// (name, index, count); `finish` runs on the complete but not yet renamed folder (its
+/// path is the argument; `summary.json` and every CSV are there) to add more outputs
+/// (figures, report, recording): an error there removes the folder like any other.
 pub fn run_scenario(
     path: &Path,
     out_dir: &Path,
@@ -145,6 +151,7 @@ pub fn run_scenario(
     overrides: &[String],
     options: &RunOptions,
     mut progress: impl FnMut(&str, usize, usize),
+    finish: impl FnOnce(&Path) -> Result<(), RunError>,
 ) -> Result<RunSummary, RunError> {
     let mut source = ScenarioSource::load(path)?;
     for o in overrides {
@@ -219,6 +226,7 @@ pub fn run_scenario(
         let summary_path = partial.join("summary.json");
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
         std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
+        finish(&partial)?;
         Ok(summary)
     })();
     let summary = match written {

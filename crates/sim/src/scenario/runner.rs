@@ -19,11 +19,63 @@ use super::source::{ScenarioError, ScenarioSource};
 use super::spec::{ControllerKind, ObserverKind, Scenario, Trajectory};
 use crate::{Plant, Sensors};
 
+/// What a long-running stage reports to a progress display.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Simulating the closed loop of a variant (`done`/`total` in control steps).
+    Simulate,
+    /// Simulating free motion to collect an observer's training data (control steps).
+    TrainingData,
+    /// Training an observer network (`done`/`total` in phases).
+    Train,
+}
+
+/// One progress report: which variant, which stage, how far.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    /// The variant being run (`"base"` without variants).
+    pub variant: &'a str,
+    /// The stage.
+    pub stage: Stage,
+    /// Units done so far.
+    pub done: u64,
+    /// Units in the stage.
+    pub total: u64,
+}
+
+/// A progress callback (called at most about a hundred times per stage).
+pub type ProgressFn = std::sync::Arc<dyn Fn(Progress<'_>) + Send + Sync>;
+
 /// Options of a run that are not part of the scenario file.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Default)]
 pub struct RunOptions {
     /// Overrides the scenario's seed (sensor noise).
     pub seed: Option<u64>,
+    /// Progress display, if any.
+    pub progress: Option<ProgressFn>,
+}
+
+impl std::fmt::Debug for RunOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RunOptions")
+            .field("seed", &self.seed)
+            .field("progress", &self.progress.is_some())
+            .finish()
+    }
+}
+
+impl RunOptions {
+    /// Reports progress when a callback is set.
+    pub fn report(&self, variant: &str, stage: Stage, done: u64, total: u64) {
+        if let Some(p) = &self.progress {
+            p(Progress {
+                variant,
+                stage,
+                done,
+                total,
+            });
+        }
+    }
 }
 
 /// The recorded time series of one variant: named columns, rows in time order.
@@ -432,7 +484,12 @@ pub fn run_variant(
     let (mut faults, mut limit_violations, mut nonfinite_torques) = (0usize, 0usize, 0usize);
     let mut max_weight_norm: f64 = 0.0;
 
+    let variant_name = variant.unwrap_or("base");
+    let progress_stride = (steps / 100).max(1);
     for k in 0..steps {
+        if k % progress_stride == 0 {
+            options.report(variant_name, Stage::Simulate, k as u64, steps as u64);
+        }
         let t = k as f64 * dt;
         trajectory.eval(t, &mut q_d, &mut qd_d, &mut qdd_d);
         {
@@ -636,6 +693,7 @@ pub fn run_variant(
         }
     }
 
+    options.report(variant_name, Stage::Simulate, steps as u64, steps as u64);
     let mut metrics = BTreeMap::new();
     metrics.insert("tracking_rmse".into(), json!(tracking.rms()));
     metrics.insert("tracking_max_abs".into(), json!(tracking.max_abs));
