@@ -1,9 +1,23 @@
-//! The `admittance` command.
+//! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
+//! train the learned observer (`train`, `grow`), query an arm's dynamics (`dynamics`,
+//! `model`).
 //!
-//! Exit codes: 0 success; 1 a run failed; 2 bad command-line arguments; 3 a bad input
-//! file (URDF, scenario, data) — always with a one- or two-line message on stderr.
+//! Exit codes:
+//!
+//! | code | meaning |
+//! |---|---|
+//! | 0 | success |
+//! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
+//! | 2 | bad command-line arguments (usage) |
+//! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder |
+//!
+//! Every failure prints one or two lines on stderr naming the file, line, key or value,
+//! and how to fix it.
 
 mod dynamics_cmd;
+mod list_cmd;
+mod progress;
+mod report_cmd;
 mod run_cmd;
 mod train_cmd;
 
@@ -25,8 +39,13 @@ enum Command {
     Dynamics(dynamics_cmd::DynamicsArgs),
     /// Print a readable summary of a URDF chain: joints, limits, masses.
     Model(dynamics_cmd::ModelArgs),
-    /// Run a scenario (every variant) and write its run folder: summary.json, CSVs, report.
+    /// Run a scenario (every variant) and write its run folder: summary.json, CSVs, figures,
+    /// report.md, report.html, recording.mcap.
     Run(run_cmd::RunArgs),
+    /// List the scenario files (name and description of each).
+    List(list_cmd::ListArgs),
+    /// Regenerate the figures, reports and recording of an existing run folder.
+    Report(report_cmd::ReportArgs),
     /// Train the learned observer's flat RBF network on free-motion data and save it.
     Train(train_cmd::TrainArgs),
     /// Add nodes to a trained network (incremental growth) and save the result.
@@ -75,13 +94,20 @@ fn main() -> ExitCode {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
-            // One line: clap's first line, plus where to look for usage.
+            // One line: clap's first line (with the next one when it ends in a colon, as
+            // in "required arguments were not provided:"), plus where to look for usage.
             let rendered = e.render().to_string();
-            let first = rendered
-                .lines()
+            let mut lines = rendered.lines().map(str::trim).filter(|l| !l.is_empty());
+            let mut first = lines
                 .next()
                 .unwrap_or("invalid arguments")
-                .trim_start_matches("error: ");
+                .trim_start_matches("error: ")
+                .to_string();
+            if first.ends_with(':') {
+                if let Some(next) = lines.next() {
+                    first = format!("{first} {next}");
+                }
+            }
             eprintln!("admittance: {first} (see `admittance --help`)");
             return ExitCode::from(2);
         }
@@ -90,6 +116,8 @@ fn main() -> ExitCode {
         Command::Dynamics(args) => dynamics_cmd::dynamics(&args),
         Command::Model(args) => dynamics_cmd::model(&args),
         Command::Run(args) => run_cmd::run(&args),
+        Command::List(args) => list_cmd::list(&args),
+        Command::Report(args) => report_cmd::report(&args),
         Command::Train(args) => train_cmd::train(&args),
         Command::Grow(args) => train_cmd::grow(&args),
     };

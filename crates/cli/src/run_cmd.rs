@@ -1,10 +1,12 @@
-//! `admittance run`: one scenario file, every variant (or one), into a run folder.
+//! `admittance run`: one scenario file, every variant (or one), into a run folder with its
+//! report (figures, report.md, report.html, recording.mcap; see docs/outputs.md).
 
 use std::path::PathBuf;
 
 use admittance_sim::scenario::{output::RunError, run_scenario, RunOptions};
 use clap::Args;
 
+use crate::progress::{self, RunProgress, Spinner};
 use crate::CliError;
 
 #[derive(Args)]
@@ -29,34 +31,57 @@ pub struct RunArgs {
     /// No progress output.
     #[arg(long)]
     quiet: bool,
+    /// Skip the MCAP recording (figures and reports are still written).
+    #[arg(long)]
+    no_recording: bool,
 }
 
+// The finish hook returns the runner's `RunError`, whatever its size.
+#[allow(clippy::result_large_err)]
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
+    let show = progress::wanted(args.quiet);
+    let bar = show.then(RunProgress::new);
     let options = RunOptions {
         seed: args.seed,
-        progress: None,
+        progress: bar.as_ref().map(RunProgress::callback),
     };
-    let quiet = args.quiet;
     let started = std::time::Instant::now();
-    let summary = run_scenario(
+    let report_options = admittance_report::Options {
+        scenario_dir: args.scenario.parent().map(|p| {
+            if p.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                p.to_path_buf()
+            }
+        }),
+        recording: !args.no_recording,
+        ..admittance_report::Options::default()
+    };
+    let result = run_scenario(
         &args.scenario,
         &args.out,
         args.variant.as_deref(),
         &args.set,
         &options,
-        |name, k, total| {
-            if !quiet {
-                eprintln!(
-                    "[{}/{}] variant {name} ({:.1} s elapsed)",
-                    k + 1,
-                    total,
-                    started.elapsed().as_secs_f64()
-                );
+        |_, k, total| {
+            if let Some(b) = &bar {
+                b.variant_started(k, total);
             }
         },
-        |_| Ok(()),
-    )
-    .map_err(|e| match e {
+        |partial| {
+            if let Some(b) = &bar {
+                b.finish();
+            }
+            let _spinner = Spinner::start(show, "writing figures, report and recording");
+            admittance_report::generate(partial, &report_options)
+                .map(|_| ())
+                .map_err(|e| RunError::Finish(format!("writing the report: {e}")))
+        },
+    );
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    let summary = result.map_err(|e| match e {
         RunError::Scenario(s) => CliError::input(s.to_string()),
         RunError::Finish(message) => CliError { code: 1, message },
         io @ RunError::Io { .. } => CliError {
@@ -69,11 +94,12 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             "{}\n",
             serde_json::to_string_pretty(&summary.json).unwrap_or_default()
         ));
-    } else if !quiet {
+    } else if !args.quiet {
         eprintln!(
-            "wrote {} ({:.1} s)",
+            "wrote {} ({:.1} s): open {} in a browser",
             summary.out_dir.display(),
-            started.elapsed().as_secs_f64()
+            started.elapsed().as_secs_f64(),
+            summary.out_dir.join("report.html").display()
         );
     }
     Ok(())

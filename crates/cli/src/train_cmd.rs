@@ -15,6 +15,7 @@ use admittance_learning::broad::{
 use admittance_sim::FreeMotionData;
 use clap::Args;
 
+use crate::progress::{self, Spinner};
 use crate::CliError;
 
 #[derive(Args)]
@@ -40,6 +41,9 @@ pub struct TrainArgs {
     /// Model file to write.
     #[arg(long)]
     out: PathBuf,
+    /// No progress output on stderr.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -62,6 +66,9 @@ pub struct GrowArgs {
     /// Model file to write.
     #[arg(long)]
     out: PathBuf,
+    /// No progress output on stderr.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// `(inputs, targets)` row-major: `[q, qdot, qddot]` and `tau`.
@@ -146,15 +153,21 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    eprintln!(
-        "training on {} rows ({} held out), {} nodes ...",
+    let what = format!(
+        "training on {} rows ({} held out), {} nodes",
         train_rows,
         data.len() - train_rows,
         args.nodes
     );
+    let show = progress::wanted(args.quiet);
+    if !args.quiet && !show {
+        eprintln!("{what} ...");
+    }
     let started = Instant::now();
+    let spinner = Spinner::start(show, what);
     let (net, report) = fit(&train, Some(&validation), &config).map_err(learn_err)?;
     let seconds = started.elapsed().as_secs_f64();
+    drop(spinner);
     net.save(&args.out).map_err(learn_err)?;
     crate::write_stdout(&format!(
         "samples: {}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nwrote {}\n",
@@ -192,6 +205,10 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
         ..BroadConfig::default()
     };
     let started = Instant::now();
+    let spinner = Spinner::start(
+        progress::wanted(args.quiet),
+        format!("growing by {} nodes on {} rows", args.nodes, train_rows),
+    );
     let report = net
         .grow(
             &train,
@@ -203,6 +220,7 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
         )
         .map_err(learn_err)?;
     let seconds = started.elapsed().as_secs_f64();
+    drop(spinner);
     let nrmse = net.evaluate(&validation, 0).map_err(learn_err)?;
     net.save(&args.out).map_err(learn_err)?;
     crate::write_stdout(&format!(

@@ -43,6 +43,7 @@ mod baselines;
 mod config;
 mod controller;
 mod error;
+mod hybrid;
 mod learned;
 mod momentum;
 mod neural;
@@ -56,11 +57,12 @@ pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, Pd
 pub use config::JointValues;
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};
+pub use hybrid::HybridObserver;
 pub use learned::LearnedObserver;
 pub use momentum::{MomentumObserver, MomentumObserverConfig};
 pub use neural::{
-    true_lumped_f, FNetworkConfig, GrowthProgress, GrowthRequest, NetworkConfig, NetworkId,
-    NeuralController, NeuralControllerConfig,
+    true_lumped_f, DeadzoneInverseConfig, FNetworkConfig, GrowthProgress, GrowthRequest,
+    NetworkConfig, NetworkId, NeuralController, NeuralControllerConfig,
 };
 pub use observer::{NoObserver, Observer, ObserverInput, OracleObserver};
 pub use safe_hold::{SafeHold, SafeHoldConfig};

@@ -355,7 +355,7 @@ fn no_step_allocates_after_construction() {
         };
         fit(&data, None, &config).unwrap().0
     };
-    let mut learned = LearnedObserver::new(model, 20.0).unwrap();
+    let mut learned = LearnedObserver::new(model.clone(), 20.0).unwrap();
     let allocs = count(|| {
         for k in 0..100 {
             let input = ObserverInput {
@@ -370,6 +370,25 @@ fn no_step_allocates_after_construction() {
         learned.reset();
     });
     assert_eq!(allocs, 0, "learned observer (with a fault step)");
+    let mut hybrid = HybridObserver::new(
+        MomentumObserver::new(common::baxter(), &MomentumObserverConfig::default()).unwrap(),
+        model,
+    )
+    .unwrap();
+    let allocs = count(|| {
+        for k in 0..100 {
+            let input = ObserverInput {
+                time: 0.0,
+                q: if k == 50 { &bad } else { &q },
+                qdot: &v,
+                qddot: &v,
+                tau_commanded: &v,
+            };
+            let _ = hybrid.update(&input, 1e-3, &mut est);
+        }
+        hybrid.reset();
+    });
+    assert_eq!(allocs, 0, "hybrid observer (with a fault step)");
 
     // The counter itself works.
     assert!(count(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);

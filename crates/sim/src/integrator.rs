@@ -94,8 +94,9 @@ impl Plant {
         let h = self.h;
         let n = self.dynx.n;
         let d = &mut self.dynx;
-        d.applied_forces(t, &self.q, &self.v);
-        if !d.needs_matrix() && !d.dissipative() {
+        let matrix_path = d.needs_matrix() || d.dissipative();
+        if !matrix_path {
+            d.applied_forces(t, &self.q, &self.v);
             let Ok(a) =
                 admittance_dynamics::aba(&d.model, &mut d.data, &self.q, &self.v, &d.tau_buf)
             else {
@@ -105,7 +106,7 @@ impl Plant {
                 self.dv[i] = h * a[i];
             }
         } else {
-            if !d.mass_matrix(&self.q, true) || !d.rhs(&self.q, &self.v) {
+            if !d.forces_and_matrix(t, &self.q, &self.v, true) {
                 return false;
             }
             let rep = d
@@ -122,7 +123,17 @@ impl Plant {
         }
         self.dynx.mass_valid = false;
         self.accumulate_explicit(1.0);
-        self.accumulate_dissipation(1.0, false);
+        // Without environment damping phi is the friction law itself, and the solver
+        // already evaluated it at the new velocity.
+        let no_damping = self.dynx.env.damping_diag().iter().all(|c| *c == 0.0);
+        match self.dynx.implicit.last_torque() {
+            Some(f) if no_damping && matrix_path => {
+                for i in 0..n {
+                    self.acc_friction[i] -= f[i];
+                }
+            }
+            _ => self.accumulate_dissipation(1.0, false),
+        }
         true
     }
 
@@ -186,8 +197,7 @@ impl Plant {
             // RK4 step, so that a stick (or any) equilibrium of friction against the
             // forcing is an equilibrium of both sub-steps.
             let d = &mut self.dynx;
-            d.applied_forces(t, &self.q, &self.v);
-            if !d.mass_matrix(&self.q, true) || !d.rhs(&self.q, &self.v) {
+            if !d.forces_and_matrix(t, &self.q, &self.v, true) {
                 return false;
             }
             d.sys.matrix_mut().copy_from_slice(&d.mat);

@@ -29,6 +29,7 @@
 //! }
 //! ```
 
+pub mod conditioning;
 pub mod environment;
 pub mod free_motion;
 pub mod integrator;
@@ -36,6 +37,7 @@ pub mod plant;
 pub mod scenario;
 pub mod sensors;
 
+pub use conditioning::InputConditioner;
 pub use environment::{
     Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
     TipForceProfileConfig, WallConfig,

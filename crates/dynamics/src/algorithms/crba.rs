@@ -16,6 +16,14 @@ pub fn crba<'d>(
     let n = model.nq();
     check_len("q", q, n)?;
     update_joint_placements(model, data, q);
+    crba_pass(model, data);
+    Ok(&data.mass_matrix)
+}
+
+/// The CRBA on `data.joint_placements` as they are (already updated for `q`).
+#[inline(always)]
+pub(crate) fn crba_pass(model: &Model, data: &mut Data) {
+    let n = model.nq();
     data.composite.copy_from_slice(&model.bodies);
     let m = data.mass_matrix.as_mut_slice();
     for i in (0..n).rev() {
@@ -35,5 +43,4 @@ pub fn crba<'d>(
             data.composite[i - 1] = data.composite[i - 1].add(&moved);
         }
     }
-    Ok(&data.mass_matrix)
 }

@@ -53,6 +53,39 @@ pub fn gravity_torque<'d>(
     let n = model.nq();
     check_len("q", q, n)?;
     update_joint_placements(model, data, q);
+    gravity_pass(model, data);
+    Ok(&data.gravity_torque)
+}
+
+/// `M(q)`, `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
+/// `data.mass_matrix`, `data.nonlinear_effects` and `data.gravity_torque`: the same values
+/// as [`crate::crba`], [`nonlinear_effects`] and [`gravity_torque`] called one after the
+/// other (the same operations), with the joint placements computed once instead of three
+/// times. What a forward-dynamics step with an implicit solve needs.
+pub fn mass_matrix_and_bias(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    gravity: bool,
+) -> Result<(), DimensionError> {
+    let n = model.nq();
+    check_len("q", q, n)?;
+    check_len("v", v, n)?;
+    update_joint_placements(model, data, q);
+    crate::algorithms::crba::crba_pass(model, data);
+    rnea_pass_at_placements(model, data, Some(v), None, None);
+    data.nonlinear_effects.copy_from(&data.tau);
+    if gravity {
+        gravity_pass(model, data);
+    }
+    Ok(())
+}
+
+/// `G(q)` on `data.joint_placements` as they are.
+#[inline(always)]
+fn gravity_pass(model: &Model, data: &mut Data) {
+    let n = model.nq();
     // With v = 0 and a = 0 every body acceleration is the (linear) gravity acceleration
     // seen in the body frame, and each body wrench is its weight.
     let mut a = -model.gravity;
@@ -72,7 +105,6 @@ pub fn gravity_torque<'d>(
             data.forces[i - 1] += moved;
         }
     }
-    Ok(&data.gravity_torque)
 }
 
 /// Nonlinear effects `C(q, v) v + G(q)`, into `data.nonlinear_effects`.
@@ -123,8 +155,20 @@ fn rnea_pass(
     a: Option<&[f64]>,
     wrench: Option<&Vector6<f64>>,
 ) {
-    let n = model.nq();
     update_joint_placements(model, data, q);
+    rnea_pass_at_placements(model, data, v, a, wrench);
+}
+
+/// [`rnea_pass`] on `data.joint_placements` as they are.
+#[inline(always)]
+fn rnea_pass_at_placements(
+    model: &Model,
+    data: &mut Data,
+    v: Option<&[f64]>,
+    a: Option<&[f64]>,
+    wrench: Option<&Vector6<f64>>,
+) {
+    let n = model.nq();
     let mut v_parent = Motion::zero();
     let mut a_parent = Motion {
         linear: -model.gravity,

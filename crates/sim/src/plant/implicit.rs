@@ -51,6 +51,11 @@ pub(crate) struct ImplicitSolver {
     /// `phi'` at the current iterate and at the trial point.
     slope: Vec<f64>,
     slope_trial: Vec<f64>,
+    /// `phi(v + dv)` at the current iterate and at the trial point.
+    torque: Vec<f64>,
+    torque_trial: Vec<f64>,
+    /// Whether `torque` holds `phi(v + dv)` at the last solve's result.
+    torque_valid: bool,
     delta: Vec<f64>,
     trial: Vec<f64>,
 }
@@ -64,9 +69,18 @@ impl ImplicitSolver {
             g_trial: vec![0.0; n],
             slope: vec![0.0; n],
             slope_trial: vec![0.0; n],
+            torque: vec![0.0; n],
+            torque_trial: vec![0.0; n],
+            torque_valid: false,
             delta: vec![0.0; n],
             trial: vec![0.0; n],
         }
+    }
+
+    /// `phi(v + dv)` at the last solve's `dv`, when that solve was nonlinear and succeeded
+    /// (the same values as evaluating the law again, without the tanh).
+    pub(crate) fn last_torque(&self) -> Option<&[f64]> {
+        self.torque_valid.then_some(&self.torque[..])
     }
 
     /// Solves `A dv + h phi(v + dv) = h r` for `dv` (`a` row-major `n x n`, SPD).
@@ -79,7 +93,29 @@ impl ImplicitSolver {
         phi: &[Friction],
         dv: &mut [f64],
     ) -> SolveReport {
-        let n = self.n;
+        match self.n {
+            7 => self.solve_n::<7>(a, v, h, r, phi, dv),
+            6 => self.solve_n::<6>(a, v, h, r, phi, dv),
+            _ => self.solve_n::<0>(a, v, h, r, phi, dv),
+        }
+    }
+
+    /// [`Self::solve`] with the size a constant (`N > 0`: the loops unroll, the bounds
+    /// checks fold away) or `self.n` (`N = 0`); the same operations either way.
+    #[inline(always)]
+    fn solve_n<const N: usize>(
+        &mut self,
+        a: &[f64],
+        v: &[f64],
+        h: f64,
+        r: &[f64],
+        phi: &[Friction],
+        dv: &mut [f64],
+    ) -> SolveReport {
+        let n = if N > 0 { N } else { self.n };
+        self.torque_valid = false;
+        let (a, v, r, phi) = (&a[..n * n], &v[..n], &r[..n], &phi[..n]);
+        let dv = &mut dv[..n];
         let nonlinear = phi.iter().any(|f| f.coulomb != 0.0);
         if !nonlinear {
             // Linear: (A + h Fv) dv = h (r - Fv v).
@@ -104,7 +140,18 @@ impl ImplicitSolver {
         }
 
         dv[..n].fill(0.0);
-        let mut gnorm2 = residual(a, v, h, r, phi, dv, &mut self.g, &mut self.slope);
+        let mut gnorm2 = residual(
+            n,
+            a,
+            v,
+            h,
+            r,
+            phi,
+            dv,
+            &mut self.g,
+            &mut self.slope,
+            &mut self.torque,
+        );
         let g0 = gnorm2.sqrt();
         let mut iterations = 0;
         while iterations < MAX_ITERATIONS {
@@ -133,6 +180,7 @@ impl ImplicitSolver {
                     self.trial[i] = dv[i] + alpha * self.delta[i];
                 }
                 let trial_norm2 = residual(
+                    n,
                     a,
                     v,
                     h,
@@ -141,11 +189,13 @@ impl ImplicitSolver {
                     &self.trial,
                     &mut self.g_trial,
                     &mut self.slope_trial,
+                    &mut self.torque_trial,
                 );
                 if trial_norm2 <= (1.0 - 1e-4 * alpha) * gnorm2 {
                     dv[..n].copy_from_slice(&self.trial);
                     std::mem::swap(&mut self.g, &mut self.g_trial);
                     std::mem::swap(&mut self.slope, &mut self.slope_trial);
+                    std::mem::swap(&mut self.torque, &mut self.torque_trial);
                     gnorm2 = trial_norm2;
                     accepted = true;
                     break;
@@ -165,6 +215,7 @@ impl ImplicitSolver {
                 break;
             }
         }
+        self.torque_valid = true;
         SolveReport {
             iterations,
             ok: true,
@@ -172,10 +223,12 @@ impl ImplicitSolver {
     }
 }
 
-/// `g = A dv + h (phi(v + dv) - r)` and `slope = phi'(v + dv)`; returns `|g|^2`.
+/// `g = A dv + h (phi(v + dv) - r)`, `slope = phi'(v + dv)` and `torque = phi(v + dv)`;
+/// returns `|g|^2`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn residual(
+    n: usize,
     a: &[f64],
     v: &[f64],
     h: f64,
@@ -184,8 +237,10 @@ fn residual(
     dv: &[f64],
     g: &mut [f64],
     slope: &mut [f64],
+    torque: &mut [f64],
 ) -> f64 {
-    let n = g.len();
+    let (a, v, r, phi, dv) = (&a[..n * n], &v[..n], &r[..n], &phi[..n], &dv[..n]);
+    let (g, slope, torque) = (&mut g[..n], &mut slope[..n], &mut torque[..n]);
     let mut norm2 = 0.0;
     for i in 0..n {
         let row = &a[i * n..i * n + n];
@@ -197,6 +252,7 @@ fn residual(
         let gi = s + h * (f - r[i]);
         g[i] = gi;
         slope[i] = df;
+        torque[i] = f;
         norm2 += gi * gi;
     }
     norm2

@@ -32,8 +32,20 @@ impl SpdSystem {
     /// is not numerically positive definite or not finite.
     #[inline]
     pub(crate) fn factor(&mut self) -> bool {
-        let n = self.n;
+        match self.n {
+            7 => self.factor_n::<7>(),
+            6 => self.factor_n::<6>(),
+            _ => self.factor_n::<0>(),
+        }
+    }
+
+    /// [`Self::factor`] with the size a constant (`N > 0`, so that the loops unroll and the
+    /// bounds checks fold away) or `self.n` (`N = 0`); the same operations either way.
+    #[inline(always)]
+    fn factor_n<const N: usize>(&mut self) -> bool {
+        let n = if N > 0 { N } else { self.n };
         let a = &mut self.a[..n * n];
+        let inv_diag = &mut self.inv_diag[..n];
         for j in 0..n {
             let mut d = a[j * n + j];
             for k in 0..j {
@@ -46,7 +58,7 @@ impl SpdSystem {
             let ljj = d.sqrt();
             a[j * n + j] = ljj;
             let inv = 1.0 / ljj;
-            self.inv_diag[j] = inv;
+            inv_diag[j] = inv;
             for i in j + 1..n {
                 let mut s = a[i * n + j];
                 for k in 0..j {
@@ -61,8 +73,20 @@ impl SpdSystem {
     /// Solves `A x = b` in place (`x` holds `b` on entry), after a successful `factor`.
     #[inline]
     pub(crate) fn solve_in_place(&self, x: &mut [f64]) {
-        let n = self.n;
+        match self.n {
+            7 => self.solve_n::<7>(x),
+            6 => self.solve_n::<6>(x),
+            _ => self.solve_n::<0>(x),
+        }
+    }
+
+    /// [`Self::solve_in_place`] with the size a constant or `self.n` (see
+    /// [`Self::factor_n`]).
+    #[inline(always)]
+    fn solve_n<const N: usize>(&self, x: &mut [f64]) {
+        let n = if N > 0 { N } else { self.n };
         let a = &self.a[..n * n];
+        let inv_diag = &self.inv_diag[..n];
         let x = &mut x[..n];
         // L y = b.
         for i in 0..n {
@@ -71,7 +95,7 @@ impl SpdSystem {
             for (k, l) in row.iter().enumerate() {
                 s -= l * x[k];
             }
-            x[i] = s * self.inv_diag[i];
+            x[i] = s * inv_diag[i];
         }
         // L^T x = y.
         for i in (0..n).rev() {
@@ -79,7 +103,7 @@ impl SpdSystem {
             for k in i + 1..n {
                 s -= a[k * n + i] * x[k];
             }
-            x[i] = s * self.inv_diag[i];
+            x[i] = s * inv_diag[i];
         }
     }
 }

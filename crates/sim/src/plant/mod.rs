@@ -30,7 +30,8 @@ pub(crate) mod linalg;
 pub(crate) mod spring;
 
 use admittance_dynamics::{
-    aba, crba, kinetic_energy, nonlinear_effects, potential_energy, Data, Model, Payload,
+    aba, crba, kinetic_energy, mass_matrix_and_bias, nonlinear_effects, potential_energy, Data,
+    Model, Payload,
 };
 use nalgebra::{Matrix3, Vector3};
 
@@ -126,6 +127,10 @@ pub(crate) struct Dynamics {
     pub nominal_data: Data,
     pub env: Environment,
     pub spring: Option<Spring>,
+    /// The spring is a gravity fraction and the nominal model has the true model's
+    /// kinematics, inertias and gravity: its `G(q)` is the true one, computed in the same
+    /// pass as `M` and `C qdot + G` ([`Dynamics::forces_and_matrix`]).
+    pub spring_shares_gravity: bool,
     pub solver: Solver,
     /// Friction per joint.
     pub friction: Vec<Friction>,
@@ -201,6 +206,51 @@ impl Dynamics {
         true
     }
 
+    /// What [`Self::applied_forces`], [`Self::mass_matrix`] and [`Self::rhs`] compute, in
+    /// that order, at `(t, q, v)`: the applied forces into the buffers, `mat = M(q) +
+    /// diag(M_E)` and `r = tau_buf - (C qdot + G)`. Unless `M` is cached, the joint
+    /// placements are computed once for `M`, `C qdot + G` and the spring's gravity (same
+    /// values, a third of the kinematics).
+    #[inline]
+    pub(crate) fn forces_and_matrix(&mut self, t: f64, q: &[f64], v: &[f64], state: bool) -> bool {
+        if state && self.mass_valid {
+            self.applied_forces(t, q, v);
+            return self.mass_matrix(q, state) && self.rhs(q, v);
+        }
+        let n = self.n;
+        let shared = self.spring_shares_gravity;
+        if mass_matrix_and_bias(&self.model, &mut self.data, q, v, shared).is_err() {
+            return false;
+        }
+        // Symmetric: row-major and column-major agree.
+        self.mat.copy_from_slice(self.data.mass_matrix.as_slice());
+        if state {
+            self.m_state.copy_from_slice(&self.mat);
+            self.mass_valid = true;
+        }
+        for (i, me) in self.env.mass_diag().iter().enumerate() {
+            self.mat[i * n + i] += me;
+        }
+        // r holds C qdot + G until the applied forces are known.
+        self.r
+            .copy_from_slice(self.data.nonlinear_effects.as_slice());
+        self.spring_buf.fill(0.0);
+        if let Some(s) = &self.spring {
+            self.spring_buf[s.joint] = if shared {
+                s.torque_from_gravity(self.data.gravity_torque.as_slice())
+            } else {
+                s.torque(&self.nominal, &mut self.nominal_data, q)
+            };
+        }
+        self.env
+            .explicit_torque(&self.model, &mut self.data, t, q, v, &mut self.ext_buf);
+        for i in 0..n {
+            self.tau_buf[i] = self.u[i] + self.spring_buf[i] + self.ext_buf[i];
+            self.r[i] = self.tau_buf[i] - self.r[i];
+        }
+        true
+    }
+
     /// `r = tau_buf - (C qdot + G)`.
     #[inline]
     pub(crate) fn rhs(&mut self, q: &[f64], v: &[f64]) -> bool {
@@ -223,15 +273,15 @@ impl Dynamics {
         state: bool,
         a: &mut [f64],
     ) -> bool {
-        self.applied_forces(t, q, v);
         if !self.needs_matrix() {
+            self.applied_forces(t, q, v);
             let Ok(qdd) = aba(&self.model, &mut self.data, q, v, &self.tau_buf) else {
                 return false;
             };
             a.copy_from_slice(qdd.as_slice());
             return a.iter().all(|x| x.is_finite());
         }
-        if !self.mass_matrix(q, state) || !self.rhs(q, v) {
+        if !self.forces_and_matrix(t, q, v, state) {
             return false;
         }
         self.sys.matrix_mut().copy_from_slice(&self.mat);
@@ -339,6 +389,9 @@ impl Plant {
             .map(|e| e * config.effort_limit_scale)
             .collect();
         let spring = Spring::new(nominal, &config.spring);
+        let spring_shares_gravity = spring
+            .as_ref()
+            .is_some_and(|s| s.is_gravity_fraction() && same_dynamics(&model, &nominal_for_spring));
         let env = Environment::new(nominal, &config.environment)?;
         let data = Data::new(&model);
         let nominal_data = Data::new(&nominal_for_spring);
@@ -360,6 +413,7 @@ impl Plant {
             nominal_data,
             env,
             spring,
+            spring_shares_gravity,
             solver: config.solver,
             phi: friction.clone(),
             friction,
@@ -629,4 +683,16 @@ impl Plant {
             self.dynx.mass_valid = false;
         }
     }
+}
+
+/// Whether two models give the same `G(q)` by the same operations: the same joints
+/// (kind, axis, placement), bodies and gravity.
+fn same_dynamics(a: &Model, b: &Model) -> bool {
+    a.gravity == b.gravity
+        && a.bodies == b.bodies
+        && a.joints.len() == b.joints.len()
+        && a.joints
+            .iter()
+            .zip(&b.joints)
+            .all(|(x, y)| x.kind == y.kind && x.axis == y.axis && x.placement == y.placement)
 }

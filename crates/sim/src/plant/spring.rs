@@ -32,6 +32,18 @@ impl Spring {
         })
     }
 
+    /// Whether the law is the gravity fraction.
+    pub(crate) fn is_gravity_fraction(&self) -> bool {
+        self.model == SpringModel::GravityFraction
+    }
+
+    /// The gravity-fraction torque from `G(q)` of the nominal model, computed elsewhere
+    /// (the same value as [`Self::torque`]).
+    #[inline]
+    pub(crate) fn torque_from_gravity(&self, g: &[f64]) -> f64 {
+        self.fraction * g.get(self.joint).copied().unwrap_or(0.0)
+    }
+
     /// The spring torque at `q` (on its joint only); `nominal` and `data` serve the
     /// gravity-fraction law.
     #[inline]

@@ -5,6 +5,7 @@ pub mod output;
 pub mod runner;
 pub mod source;
 pub mod spec;
+pub mod training;
 
 pub use output::{run_scenario, RunSummary};
 pub use runner::{run_variant, Progress, ProgressFn, RunOptions, Stage, TimeSeries, VariantRun};

@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use admittance_control::{
     true_lumped_f, Admittance, AdmittanceInput, ComputedTorqueController, ControlInput, Controller,
-    GrowthRequest, MomentumObserver, NetworkId, NeuralController, Observer, ObserverInput,
-    PdController, StepStatus,
+    GrowthRequest, HybridObserver, LearnedObserver, MomentumObserver, NetworkId, NeuralController,
+    Observer, ObserverInput, PdController, StepStatus,
 };
 use admittance_dynamics::{forward_kinematics, Data, Model};
 use serde_json::{json, Value};
@@ -366,32 +366,93 @@ pub fn run_variant(
     };
 
     // The external-torque observer (METHOD.md section 5).
+    let momentum_err = |e: admittance_control::ConfigError| {
+        source.error_at(
+            &format!("observer.momentum.{}", e.key),
+            variant,
+            e.message,
+            None,
+        )
+    };
+    let nominal_observer_model = || {
+        model
+            .with_scaled_inertias(scenario.observer.nominal_inertia_scale)
+            .map_err(|e| {
+                source.error_at(
+                    "observer.nominal_inertia_scale",
+                    variant,
+                    e.to_string(),
+                    None,
+                )
+            })
+    };
+    let mut observer_metrics: BTreeMap<String, Value> = BTreeMap::new();
     let mut observer: Option<Box<dyn Observer>> = match scenario.observer.kind {
         ObserverKind::None | ObserverKind::Oracle => None,
-        ObserverKind::Momentum => {
-            let scaled = model
-                .with_scaled_inertias(scenario.observer.nominal_inertia_scale)
-                .map_err(|e| {
-                    source.error_at(
-                        "observer.nominal_inertia_scale",
-                        variant,
-                        e.to_string(),
-                        None,
-                    )
-                })?;
-            Some(Box::new(
-                MomentumObserver::new(Arc::new(scaled), &scenario.observer.momentum).map_err(
-                    |e| {
-                        source.error_at(
-                            &format!("observer.momentum.{}", e.key),
-                            variant,
-                            e.message,
-                            None,
-                        )
-                    },
-                )?,
-            ))
+        ObserverKind::Momentum => Some(Box::new(
+            MomentumObserver::new(
+                Arc::new(nominal_observer_model()?),
+                &scenario.observer.momentum,
+            )
+            .map_err(momentum_err)?,
+        )),
+        ObserverKind::Learned | ObserverKind::Hybrid => {
+            let hybrid = scenario.observer.kind == ObserverKind::Hybrid;
+            let nominal_model = if hybrid {
+                Some(nominal_observer_model()?)
+            } else {
+                None
+            };
+            let net = super::training::observer_network(
+                source,
+                variant,
+                &scenario,
+                path,
+                &joints,
+                nominal_model.as_ref(),
+                options,
+            )?;
+            observer_metrics.insert("train_seconds".into(), json!(net.train_seconds));
+            observer_metrics.insert("observer_nodes".into(), json!(net.model.n_nodes()));
+            observer_metrics.insert("validation_nrmse".into(), json!(net.validation_nrmse));
+            observer_metrics.insert("observer_model_cached".into(), json!(net.cached));
+            observer_metrics.insert("training_samples".into(), json!(net.samples));
+            observer_metrics.insert("observer_lambda".into(), json!(net.lambda));
+            let observer_err = |e: admittance_control::ConfigError| {
+                source.error_at("observer.training", variant, e.to_string(), None)
+            };
+            match nominal_model {
+                Some(nominal_model) => {
+                    let momentum =
+                        MomentumObserver::new(Arc::new(nominal_model), &scenario.observer.momentum)
+                            .map_err(momentum_err)?;
+                    Some(Box::new(
+                        HybridObserver::new(momentum, net.model).map_err(observer_err)?,
+                    ))
+                }
+                // The runner low-passes every estimate (observer.cutoff_hz): none inside.
+                None => Some(Box::new(
+                    LearnedObserver::new(net.model, 0.0).map_err(observer_err)?,
+                )),
+            }
         }
+    };
+    // The learned networks were trained on the filtered command one sample late (the
+    // pairing with q'' of the free-motion data, docs/outputs.md); they are fed the same.
+    let delayed_tau = scenario.observer.kind.is_learned();
+    let mut conditioner = if scenario.observer.input_filter_hz > 0.0 && observer.is_some() {
+        Some(
+            crate::InputConditioner::new(
+                n,
+                scenario.observer.input_filter_hz,
+                plant_config.control_rate_hz,
+            )
+            .map_err(|e| {
+                source.error_at("observer.input_filter_hz", variant, e.to_string(), None)
+            })?,
+        )
+    } else {
+        None
     };
     // First-order low-pass of the estimate: alpha = dt / (dt + 1 / (2 pi f_c)).
     let estimate_alpha = if scenario.observer.cutoff_hz > 0.0 {
@@ -507,15 +568,35 @@ pub fn run_variant(
                 // What the sensors saw: the filtered angles with their derivatives and the
                 // command through the same filter (matching delays, METHOD.md section 7).
                 let m = sensors.measurement();
-                let input = ObserverInput {
-                    time: t,
-                    q: &m.q_filtered,
-                    qdot: &m.qdot,
-                    qddot: &m.qddot,
-                    tau_commanded: &m.tau_filtered,
+                let tau_in: &[f64] = if delayed_tau {
+                    &tau_filtered_prev
+                } else {
+                    &m.tau_filtered
+                };
+                let input = match conditioner.as_mut() {
+                    Some(c) => {
+                        c.update(&m.q_filtered, tau_in);
+                        ObserverInput {
+                            time: t,
+                            q: &c.q,
+                            qdot: &c.qdot,
+                            qddot: &c.qddot,
+                            tau_commanded: &c.tau,
+                        }
+                    }
+                    None => ObserverInput {
+                        time: t,
+                        q: &m.q_filtered,
+                        qdot: &m.qdot,
+                        qddot: &m.qddot,
+                        tau_commanded: tau_in,
+                    },
                 };
                 if !obs.update(&input, dt, &mut estimate_raw).is_ok() {
                     observer_faults += 1;
+                }
+                if t < scenario.observer.warmup {
+                    estimate_raw.fill(0.0);
                 }
                 for (e, r) in estimate.iter_mut().zip(&estimate_raw) {
                     *e += estimate_alpha * (r - *e);
@@ -532,8 +613,8 @@ pub fn run_variant(
                 row.extend_from_slice(v);
             }
             fm.rows.push(row);
-            tau_filtered_prev.copy_from_slice(&m.tau_filtered);
         }
+        tau_filtered_prev.copy_from_slice(&sensors.measurement().tau_filtered);
         // The oracle's admittance model, run beside the variant's (admittance_error_rms).
         if let Some(adm) = oracle_admittance.as_mut() {
             let input = AdmittanceInput {
@@ -720,6 +801,7 @@ pub fn run_variant(
     metrics.insert("external_torque_rmse".into(), json!(estimate_error.rms()));
     observer_stats.insert(&mut metrics, oracle_admittance.is_some());
     metrics.insert("observer_faults".into(), json!(observer_faults));
+    metrics.extend(observer_metrics);
     let mut nodes = serde_json::Map::new();
     if let Some(nn) = controller.neural() {
         for id in nn.network_ids() {

@@ -21,7 +21,8 @@
 //! [plant]                    # admittance_sim::PlantConfig: friction, deadzones, spring, sensors, ...
 //! [controller]               # kind = "neural" | "pd" | "computed_torque", with [controller.neural] etc.
 //! [admittance]               # optional: admittance model and reference saturation
-//! [observer]                 # kind = "none" | "oracle" | "momentum", nominal_inertia_scale, cutoff_hz
+//! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz
+//! [observer.training]        # learned / hybrid: free-motion data, validation data, nodes, friction inputs, cache
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [variants.NAME]            # overrides of any of the above, per variant
@@ -120,6 +121,92 @@ pub enum ObserverKind {
     /// The generalised-momentum observer with a nominal model (METHOD.md section 5,
     /// baseline): settings in `[observer.momentum]`, model error in `nominal_inertia_scale`.
     Momentum,
+    /// The paper's learned observer (eq. 19): a flat RBF network trained on free-motion
+    /// data (`[observer.training]`) predicts the free-motion torque.
+    Learned,
+    /// The momentum observer with a flat RBF network trained on what its nominal model
+    /// misses in free motion (`admittance_control::HybridObserver`).
+    Hybrid,
+}
+
+impl ObserverKind {
+    /// Whether the observer needs a trained network.
+    pub fn is_learned(self) -> bool {
+        matches!(self, ObserverKind::Learned | ObserverKind::Hybrid)
+    }
+}
+
+/// Where the training of a learned observer comes from (`[observer.training]`).
+///
+/// The training data are free-motion samples (docs/outputs.md, "Free-motion data"): `data`
+/// names either a scenario file (`.toml`) that records them, simulated at the start of the
+/// run (e.g. `free_motion.toml`), or a CSV file a user recorded on a real arm. The
+/// validation data, a different excitation, come the same way (`validation`): the ridge
+/// parameter lambda is chosen on them and `validation_nrmse` is measured on them. Paths are
+/// relative to the scenario file. A trained network is cached in `cache_dir` under a key
+/// of the data's identity (file contents; for a data scenario also its URDF and the program
+/// version) and every training setting; a matching entry is loaded instead of training.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingSpec {
+    /// Training data: a data scenario (`.toml`, with `[record] free_motion_csv = true`) or
+    /// a free-motion CSV file.
+    pub data: PathBuf,
+    /// Validation data (a different excitation): a data scenario or a CSV file.
+    pub validation: PathBuf,
+    /// Enhancement (Gaussian) nodes; the paper uses 1000.
+    #[serde(default = "default_nodes")]
+    pub nodes: usize,
+    /// Friction-shaped inputs `tanh(qdot / v)` beside the Gaussian nodes (METHOD.md
+    /// section 7).
+    #[serde(default)]
+    pub friction_features: bool,
+    /// The scales `v` (rad/s) of the friction-shaped inputs.
+    #[serde(default = "default_friction_scales")]
+    pub friction_scales: Vec<f64>,
+    /// Seed of the centre placement.
+    #[serde(default = "default_training_seed")]
+    pub seed: u64,
+    /// Node widths: `eta_j = width_scale * (mean distance from centre j to its
+    /// `width_neighbours` nearest centres)`, in standardised units (the broad module's kNN
+    /// rule). Defaults 2 and 8.
+    #[serde(default = "default_width_scale")]
+    pub width_scale: f64,
+    /// See `width_scale`.
+    #[serde(default = "default_width_neighbours")]
+    pub width_neighbours: usize,
+    /// Folder of cached networks, relative to the scenario file; the environment variable
+    /// `ADMITTANCE_CACHE_DIR` overrides it. Default `../.admittance-cache`.
+    #[serde(default = "default_cache_dir")]
+    pub cache_dir: PathBuf,
+    /// Whether to use and fill the cache.
+    #[serde(default = "default_true")]
+    pub cache: bool,
+}
+
+fn default_nodes() -> usize {
+    1000
+}
+fn default_friction_scales() -> Vec<f64> {
+    vec![0.01, 0.05, 0.2]
+}
+fn default_training_seed() -> u64 {
+    admittance_learning::broad::BroadConfig::default().seed
+}
+fn default_warmup() -> f64 {
+    0.5
+}
+fn default_width_scale() -> f64 {
+    2.0
+}
+fn default_width_neighbours() -> usize {
+    8
+}
+fn default_cache_dir() -> PathBuf {
+    PathBuf::from("../.admittance-cache")
+}
+fn default_true() -> bool {
+    true
 }
 
 /// The observer section (`[observer]`).
@@ -137,9 +224,24 @@ pub struct ObserverSpec {
     /// but `oracle` (METHOD.md sections 5 and 7); 0 disables it. Default 0.
     #[serde(default)]
     pub cutoff_hz: f64,
-    /// Settings of the momentum observer.
+    /// Cut-off (Hz) of a second 2nd-order low-pass on the angles and torques every observer
+    /// but `oracle` is fed, with velocities and accelerations differentiated again after it
+    /// (`admittance_sim::InputConditioner`); the learned observers' training data pass the
+    /// same stage. 0 (default) feeds the sensors' signals as they are.
+    #[serde(default)]
+    pub input_filter_hz: f64,
+    /// Warm-up (s): the estimate of every observer but `oracle` is held at zero for this
+    /// long after the start while the observer runs, so that the start-up transients of
+    /// the sensors' and the observer's filters (the torque filters start from zero
+    /// command) do not reach the admittance model. Default 0.5 s.
+    #[serde(default = "default_warmup")]
+    pub warmup: f64,
+    /// Settings of the momentum observer (also the momentum part of `hybrid`).
     #[serde(default)]
     pub momentum: MomentumObserverConfig,
+    /// Training of the network (`learned`, `hybrid`).
+    #[serde(default)]
+    pub training: Option<TrainingSpec>,
 }
 
 impl Default for ObserverSpec {
@@ -148,7 +250,10 @@ impl Default for ObserverSpec {
             kind: ObserverKind::None,
             nominal_inertia_scale: 1.0,
             cutoff_hz: 0.0,
+            input_filter_hz: 0.0,
+            warmup: default_warmup(),
             momentum: MomentumObserverConfig::default(),
+            training: None,
         }
     }
 }
@@ -426,6 +531,65 @@ impl Scenario {
                     self.observer.cutoff_hz
                 ),
             ));
+        }
+        if !(self.observer.warmup.is_finite() && self.observer.warmup >= 0.0) {
+            out.push(Invalid::new(
+                "observer.warmup",
+                format!("is {}, must be >= 0 s", self.observer.warmup),
+            ));
+        }
+        let nyquist = 0.5 * self.plant.control_rate_hz;
+        if !(self.observer.input_filter_hz.is_finite()
+            && self.observer.input_filter_hz >= 0.0
+            && self.observer.input_filter_hz < nyquist)
+        {
+            out.push(Invalid::new(
+                "observer.input_filter_hz",
+                format!(
+                    "is {}, must be in [0, {nyquist}) Hz (0: no second filter)",
+                    self.observer.input_filter_hz
+                ),
+            ));
+        }
+        if self.observer.kind.is_learned() {
+            match &self.observer.training {
+                None => out.push(
+                    Invalid::new(
+                        "observer.kind",
+                        "needs an [observer.training] table (the free-motion data to learn from)",
+                    )
+                    .hint("add [observer.training] with data = \"free_motion.toml\" (or a recorded FILE.csv) and validation = ..."),
+                ),
+                Some(t) => {
+                    if t.nodes == 0 {
+                        out.push(Invalid::new("observer.training.nodes", "must be at least 1"));
+                    }
+                    if !(t.width_scale.is_finite() && t.width_scale > 0.0) {
+                        out.push(Invalid::new(
+                            "observer.training.width_scale",
+                            format!("is {}, must be finite and > 0", t.width_scale),
+                        ));
+                    }
+                    if t.width_neighbours == 0 {
+                        out.push(Invalid::new(
+                            "observer.training.width_neighbours",
+                            "must be at least 1",
+                        ));
+                    }
+                    if t.friction_features
+                        && (t.friction_scales.is_empty()
+                            || t.friction_scales.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+                    {
+                        out.push(Invalid::new(
+                            "observer.training.friction_scales",
+                            format!(
+                                "is {:?}, must be a non-empty list of finite values > 0 (rad/s)",
+                                t.friction_scales
+                            ),
+                        ));
+                    }
+                }
+            }
         }
         if self.output.decimation == 0 {
             out.push(Invalid::new("output.decimation", "must be at least 1"));

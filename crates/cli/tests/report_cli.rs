@@ -1,0 +1,315 @@
+//! The README's main command on a short run, and `admittance report` / `list`: every
+//! output of a run folder exists and parses (summary.json, the CSVs, recording.mcap read
+//! back with the mcap crate, the PNGs decoded, the SVGs and report.html parsed as XML with
+//! no external references), and bad run folders give exit code 3 with one line naming the
+//! file.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn admittance(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_admittance"))
+        .current_dir(root())
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn tempdir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "admittance-report-cli-{tag}-{}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the deadzone scenario for 3 s into `dir/run`.
+fn short_run(dir: &Path) -> PathBuf {
+    let out = dir.join("run");
+    let (code, _, err) = admittance(&[
+        "run",
+        "scenarios/deadzone.toml",
+        "--set",
+        "duration=3",
+        "--set",
+        "evaluation_start=1",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    out
+}
+
+/// Parses a CSV: every row has the header's column count and only numbers.
+fn check_csv(path: &Path) -> (Vec<String>, usize) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    assert_eq!(header[0], "t");
+    let mut rows = 0;
+    for (k, line) in lines.enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(
+            fields.len(),
+            header.len(),
+            "{}: line {}",
+            path.display(),
+            k + 2
+        );
+        for f in fields {
+            assert!(
+                f.parse::<f64>().is_ok(),
+                "{}: line {}: {f}",
+                path.display(),
+                k + 2
+            );
+        }
+        rows += 1;
+    }
+    (header, rows)
+}
+
+#[test]
+fn run_writes_every_output_and_report_regenerates_them() {
+    let dir = tempdir("full");
+    let out = short_run(&dir);
+
+    // summary.json
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["format_version"], 1);
+    let variants: Vec<String> = summary["variants"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .cloned()
+        .collect();
+    assert!(
+        variants.contains(&"nn_compensated".to_string()),
+        "{variants:?}"
+    );
+
+    // CSVs
+    let mut rows_of = BTreeMap::new();
+    for v in &variants {
+        let (header, rows) = check_csv(&out.join(format!("{v}.csv")));
+        assert!(rows > 100, "{v}: {rows} rows");
+        assert!(header.iter().any(|c| c == "tau_ext_hat.left_s0"));
+        rows_of.insert(v.clone(), (header, rows));
+    }
+
+    // recording.mcap: channels per variant, one message per CSV row and channel, JSON payloads.
+    let bytes = std::fs::read(out.join("recording.mcap")).unwrap();
+    let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+    let mut last_time: BTreeMap<String, u64> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "json");
+        let schema = m.channel.schema.as_ref().expect("a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        let _: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        let payload: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let t = payload["t"].as_f64().unwrap();
+        assert_eq!(m.log_time, (t * 1e9).round() as u64);
+        let prev = last_time.insert(m.channel.topic.clone(), m.log_time);
+        assert!(
+            prev.is_none_or(|p| p < m.log_time),
+            "{}: time not increasing",
+            m.channel.topic
+        );
+        if m.channel.topic.ends_with("/joint_state") {
+            assert!(
+                payload["q"]["left_s0"].is_number() && payload["q_meas"]["left_w2"].is_number()
+            );
+        }
+        *per_topic.entry(m.channel.topic.clone()).or_default() += 1;
+    }
+    for v in &variants {
+        let rows = rows_of[v].1;
+        for group in ["joint_state", "reference", "torque", "external_torque"] {
+            assert_eq!(
+                per_topic.get(&format!("/{v}/{group}")),
+                Some(&rows),
+                "/{v}/{group}: {per_topic:?}"
+            );
+        }
+        let has_nodes = rows_of[v].0.iter().any(|c| c.starts_with("nodes."));
+        assert_eq!(
+            per_topic.contains_key(&format!("/{v}/nodes")),
+            has_nodes,
+            "{v}"
+        );
+    }
+    let metadata: Vec<mcap::records::Metadata> = mcap::read::LinearReader::new(&bytes)
+        .unwrap()
+        .filter_map(|r| match r.unwrap() {
+            mcap::records::Record::Metadata(m) => Some(m),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(metadata.len(), 1);
+    assert_eq!(metadata[0].metadata["format_version"], "1");
+
+    // Figures: the paper's Figs 7-12 and the wide pair, PNGs that decode, SVGs that parse.
+    let figures = out.join("figures");
+    let mut pngs = Vec::new();
+    for e in std::fs::read_dir(&figures).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if name.ends_with(".png") {
+            let decoder =
+                png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).unwrap()));
+            let mut reader = decoder.read_info().unwrap();
+            let mut buf = vec![0; reader.output_buffer_size()];
+            let info = reader.next_frame(&mut buf).unwrap();
+            assert!(info.width >= 800 && info.height >= 300, "{name}");
+            // Not blank: some pixels are coloured.
+            assert!(
+                buf.chunks(3).any(|px| px[0] != px[1] || px[1] != px[2]),
+                "{name} has no colour"
+            );
+            pngs.push(name);
+        } else if name.ends_with(".svg") {
+            let text = std::fs::read_to_string(&p).unwrap();
+            roxmltree::Document::parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(
+                text.contains("@font-face") && text.contains("data:font/ttf;base64,"),
+                "{name}"
+            );
+        }
+    }
+    pngs.sort();
+    let ids: Vec<&str> = pngs.iter().map(|n| &n[..n.find('_').unwrap()]).collect();
+    let mut expected = vec!["fig07", "fig08", "fig09", "fig10", "fig11", "fig12"];
+    let has = |v: &str| variants.iter().any(|x| x == v);
+    if has("nn_compensated_wide") && has("nn_uncompensated_wide") {
+        expected.extend(["fig11b", "fig12b"]);
+        expected.sort();
+    }
+    assert_eq!(ids, expected);
+
+    // report.html: well-formed, self-contained, one image per figure, the figure table.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    // `<!DOCTYPE html>` is the only DTD; the rest must be well-formed XML.
+    let options = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&html, options).unwrap();
+    assert_eq!(doc.root_element().tag_name().name(), "html");
+    assert!(
+        !html.contains("http://") && !html.contains("https://"),
+        "external reference in report.html"
+    );
+    let imgs: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("img"))
+        .collect();
+    assert_eq!(imgs.len(), pngs.len());
+    assert!(imgs.iter().all(|i| i
+        .attribute("src")
+        .unwrap()
+        .starts_with("data:image/png;base64,")));
+    assert!(html.contains("@font-face"));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("figures/fig12_s0_control_inputs.png") && md.contains("| ee_error_rms |"));
+
+    // `admittance report` regenerates the figures, reports and recording.
+    std::fs::remove_dir_all(&figures).unwrap();
+    std::fs::remove_file(out.join("recording.mcap")).unwrap();
+    std::fs::remove_file(out.join("report.html")).unwrap();
+    let (code, _, err) = admittance(&["report", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read_dir(&figures).unwrap().count(), 2 * pngs.len());
+    assert_eq!(
+        std::fs::read(out.join("recording.mcap")).unwrap().len(),
+        bytes.len()
+    );
+    assert!(out.join("report.html").is_file());
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+
+    // Bad folders: exit 3, one line naming the file.
+    let summary_path = out.join("summary.json");
+    let good = std::fs::read_to_string(&summary_path).unwrap();
+    let cases = [
+        (
+            "corrupted",
+            good[..good.len() / 2].to_string(),
+            "summary.json",
+            "not valid JSON",
+        ),
+        (
+            "newer version",
+            good.replace("\"format_version\": 1", "\"format_version\": 99"),
+            "summary.json",
+            "format_version 99",
+        ),
+    ];
+    for (what, text, file, words) in cases {
+        std::fs::write(&summary_path, text).unwrap();
+        let (code, _, err) = admittance(&["report", out.to_str().unwrap()]);
+        assert_eq!(code, 3, "{what}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{what}: {err}");
+        assert!(err.contains(file) && err.contains(words), "{what}: {err}");
+    }
+    std::fs::write(&summary_path, &good).unwrap();
+    std::fs::remove_file(out.join("pd.csv")).unwrap();
+    let (code, _, err) = admittance(&["report", out.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("pd.csv") && err.contains("missing"), "{err}");
+    let (code, _, err) = admittance(&["report", dir.join("nowhere").to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn list_shows_every_scenario_with_its_description() {
+    let (code, out, err) = admittance(&["list"]);
+    assert_eq!(code, 0, "{err}");
+    let files: Vec<String> = std::fs::read_dir(root().join("scenarios"))
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    assert_eq!(out.lines().count(), files.len(), "{out}");
+    let deadzone = out
+        .lines()
+        .find(|l| l.starts_with("deadzone.toml"))
+        .expect("deadzone listed");
+    assert!(deadzone.contains("Experiment A"), "{deadzone}");
+
+    let dir = tempdir("list");
+    std::fs::write(
+        dir.join("ok.toml"),
+        "name = \"x\"\ndescription = \"a test\"\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("bad.toml"), "name = \n").unwrap();
+    let (code, out, err) = admittance(&["list", "--dir", dir.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(out.contains("ok.toml") && out.contains("a test"), "{out}");
+    assert!(
+        err.contains("bad.toml") && err.trim_end().lines().count() == 1,
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,459 @@
+//! The networks of the learned observers (`observer.kind = "learned"` or `"hybrid"`),
+//! obtained at the start of a run: from the cache when the data and every setting match,
+//! otherwise trained on free-motion data (METHOD.md section 5) that is either simulated
+//! from a data scenario or read from a recorded CSV file (docs/outputs.md).
+//!
+//! What the network learns:
+//! - `learned`: the free-motion torque `tau(q, q', q'')` (the paper's eq. 19 observer);
+//! - `hybrid`: what the momentum observer's nominal model misses,
+//!   `delta = tau - RNEA_nominal(q, q', q'')` (`admittance_control::HybridObserver`).
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use admittance_dynamics::{rnea, Data, Model};
+use admittance_learning::broad::{
+    fit, fnv1a64, BroadConfig, BroadModel, Dataset, FrictionFeatures, WidthRule,
+};
+use serde_json::{json, Value};
+
+use super::runner::{run_variant, RunOptions, Stage};
+use super::source::{ScenarioError, ScenarioSource};
+use super::spec::{ObserverKind, Scenario, TrainingSpec};
+use crate::FreeMotionData;
+
+/// Version of the cache entries (bump when what a key stands for changes).
+const CACHE_FORMAT_VERSION: u32 = 1;
+
+/// A network ready for an observer, with how it was obtained.
+#[derive(Clone, Debug)]
+pub struct TrainedNetwork {
+    /// The network.
+    pub model: BroadModel,
+    /// Wall time of the fit (features, Gram, solves, validation) when it was trained; the
+    /// recorded time of the original fit when it came from the cache.
+    pub train_seconds: f64,
+    /// Per-joint NRMSE of the network's target on the validation data (RMSE over the
+    /// standard deviation of the target).
+    pub validation_nrmse: Vec<f64>,
+    /// Training rows.
+    pub samples: usize,
+    /// Validation rows.
+    pub validation_samples: usize,
+    /// Chosen (absolute) ridge parameter.
+    pub lambda: f64,
+    /// Whether it came from the cache.
+    pub cached: bool,
+}
+
+/// Free-motion data simulated in this process, by identity (a run with several learned
+/// variants simulates its data once).
+static SIMULATED: Mutex<Vec<(u64, Arc<FreeMotionData>)>> = Mutex::new(Vec::new());
+
+/// Where a data set comes from, and the hash that identifies it.
+struct DataSource {
+    path: PathBuf,
+    simulated: bool,
+    key: &'static str,
+    identity: u64,
+}
+
+fn resolve(scenario_file: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        scenario_file.parent().unwrap_or(Path::new(".")).join(p)
+    }
+}
+
+/// The cache folder: `ADMITTANCE_CACHE_DIR`, or `cache_dir` relative to the scenario file.
+fn cache_dir(scenario_file: &Path, spec: &TrainingSpec) -> PathBuf {
+    match std::env::var_os("ADMITTANCE_CACHE_DIR") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => resolve(scenario_file, &spec.cache_dir),
+    }
+}
+
+struct Ctx<'a> {
+    source: &'a ScenarioSource,
+    variant: Option<&'a str>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, key: &str, message: String, hint: Option<&str>) -> ScenarioError {
+        self.source
+            .error_at(key, self.variant, message, hint.map(String::from))
+    }
+}
+
+fn data_source(
+    ctx: &Ctx<'_>,
+    scenario_file: &Path,
+    key: &'static str,
+    given: &Path,
+) -> Result<DataSource, ScenarioError> {
+    let path = resolve(scenario_file, given);
+    let simulated = path.extension().is_some_and(|e| e == "toml");
+    let bytes = std::fs::read(&path).map_err(|e| {
+        ctx.err(
+            key,
+            format!("cannot read {}: {e}", path.display()),
+            Some("the path is relative to the scenario file"),
+        )
+    })?;
+    let mut identity = fnv1a64(&bytes);
+    if simulated {
+        // The simulated data also depend on the arm file and the program that simulates.
+        let data_source = ScenarioSource::load(&path)?;
+        let data_scenario: Scenario = data_source.resolve(None)?;
+        let urdf = data_scenario.urdf_path(&path);
+        let urdf_bytes = std::fs::read(&urdf).map_err(|e| {
+            ctx.err(
+                key,
+                format!(
+                    "{}: cannot read its URDF {}: {e}",
+                    path.display(),
+                    urdf.display()
+                ),
+                None,
+            )
+        })?;
+        let mut ident = identity.to_le_bytes().to_vec();
+        ident.extend_from_slice(&fnv1a64(&urdf_bytes).to_le_bytes());
+        ident.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
+        identity = fnv1a64(&ident);
+    }
+    Ok(DataSource {
+        path,
+        simulated,
+        key,
+        identity,
+    })
+}
+
+/// Simulates (or recalls) the free-motion data of a data scenario.
+fn simulated_data(
+    ctx: &Ctx<'_>,
+    data: &DataSource,
+    options: &RunOptions,
+) -> Result<Arc<FreeMotionData>, ScenarioError> {
+    if let Ok(memo) = SIMULATED.lock() {
+        if let Some((_, d)) = memo.iter().find(|(id, _)| *id == data.identity) {
+            return Ok(d.clone());
+        }
+    }
+    let source = ScenarioSource::load(&data.path)?;
+    if !source.variant_names().is_empty() {
+        return Err(ctx.err(
+            data.key,
+            format!(
+                "{} has variants; a data scenario must describe one run",
+                data.path.display()
+            ),
+            None,
+        ));
+    }
+    let variant_label = ctx.variant.unwrap_or("base").to_string();
+    let outer = options.progress.clone();
+    let nested = RunOptions {
+        seed: None,
+        progress: outer.map(|p| -> super::runner::ProgressFn {
+            Arc::new(move |e: super::runner::Progress<'_>| {
+                p(super::runner::Progress {
+                    variant: &variant_label,
+                    stage: Stage::TrainingData,
+                    ..e
+                })
+            })
+        }),
+    };
+    let run = run_variant(&source, &data.path, None, &nested)?;
+    let Some(series) = run.free_motion else {
+        return Err(ctx.err(
+            data.key,
+            format!("{} does not record free-motion data", data.path.display()),
+            Some("add [record] free_motion_csv = true to that scenario"),
+        ));
+    };
+    let n = run.joints.len();
+    let mut out = FreeMotionData {
+        joints: run.joints.clone(),
+        t: Vec::with_capacity(series.rows.len()),
+        q: Vec::with_capacity(series.rows.len() * n),
+        qdot: Vec::with_capacity(series.rows.len() * n),
+        qddot: Vec::with_capacity(series.rows.len() * n),
+        tau: Vec::with_capacity(series.rows.len() * n),
+    };
+    // Columns: t, q.*, qdot.*, qddot.*, tau.* (runner.rs).
+    for row in &series.rows {
+        out.t.push(row[0]);
+        out.q.extend_from_slice(&row[1..1 + n]);
+        out.qdot.extend_from_slice(&row[1 + n..1 + 2 * n]);
+        out.qddot.extend_from_slice(&row[1 + 2 * n..1 + 3 * n]);
+        out.tau.extend_from_slice(&row[1 + 3 * n..1 + 4 * n]);
+    }
+    let out = Arc::new(out);
+    if let Ok(mut memo) = SIMULATED.lock() {
+        // Keep the training and the validation set of the latest scenario.
+        if memo.len() >= 2 {
+            memo.remove(0);
+        }
+        memo.push((data.identity, out.clone()));
+    }
+    Ok(out)
+}
+
+fn load_data(
+    ctx: &Ctx<'_>,
+    data: &DataSource,
+    options: &RunOptions,
+) -> Result<Arc<FreeMotionData>, ScenarioError> {
+    if data.simulated {
+        simulated_data(ctx, data, options)
+    } else {
+        FreeMotionData::load(&data.path)
+            .map(Arc::new)
+            .map_err(|e| ctx.err(data.key, e.to_string(), None))
+    }
+}
+
+/// Inputs `[q, q', q'']` and targets (row-major) of a data set.
+fn arrays(
+    ctx: &Ctx<'_>,
+    data: &FreeMotionData,
+    key: &str,
+    arm_joints: &[String],
+    nominal: Option<&Model>,
+    input_filter_hz: f64,
+) -> Result<(Vec<f64>, Vec<f64>), ScenarioError> {
+    if data.joints != arm_joints {
+        return Err(ctx.err(
+            key,
+            format!(
+                "the data's joints [{}] are not the arm's [{}] (chain order)",
+                data.joints.join(", "),
+                arm_joints.join(", ")
+            ),
+            None,
+        ));
+    }
+    let n = data.dof();
+    let mut x = Vec::with_capacity(data.len() * 3 * n);
+    let mut y = Vec::with_capacity(data.len() * n);
+    if input_filter_hz > 0.0 {
+        // The observer's second filter stage, as at run time (conditioning.rs): the
+        // data's q and tau through it, q differentiated again.
+        let span = data.t.last().copied().unwrap_or(0.0) - data.t.first().copied().unwrap_or(0.0);
+        let rate = if data.len() > 1 && span > 0.0 {
+            (data.len() - 1) as f64 / span
+        } else {
+            0.0
+        };
+        let mut c = crate::InputConditioner::new(n, input_filter_hz, rate).map_err(|e| {
+            ctx.err(
+                "observer.input_filter_hz",
+                format!("with the data's sample rate {rate:.1} Hz: {e}"),
+                None,
+            )
+        })?;
+        for k in 0..data.len() {
+            let r = k * n..(k + 1) * n;
+            c.update(&data.q[r.clone()], &data.tau[r]);
+            for s in [&c.q, &c.qdot, &c.qddot] {
+                x.extend_from_slice(s);
+            }
+            y.extend_from_slice(&c.tau);
+        }
+    } else {
+        for k in 0..data.len() {
+            for s in [&data.q, &data.qdot, &data.qddot] {
+                x.extend_from_slice(&s[k * n..(k + 1) * n]);
+            }
+        }
+        y.extend_from_slice(&data.tau);
+    }
+    if let Some(model) = nominal {
+        let mut d = Data::new(model);
+        for k in 0..data.len() {
+            let r = k * n..(k + 1) * n;
+            let row = &x[3 * k * n..3 * (k + 1) * n];
+            let tau_model = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
+                .map_err(|e| ctx.err(key, format!("nominal model: {e}"), None))?;
+            for (yi, m) in y[r].iter_mut().zip(tau_model.iter()) {
+                *yi -= m;
+            }
+        }
+    }
+    Ok((x, y))
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path)
+}
+
+/// The network of a learned or hybrid observer, from the cache or trained now. `nominal`
+/// is the momentum observer's nominal model for `hybrid`.
+pub(crate) fn observer_network(
+    source: &ScenarioSource,
+    variant: Option<&str>,
+    scenario: &Scenario,
+    scenario_file: &Path,
+    arm_joints: &[String],
+    nominal: Option<&Model>,
+    options: &RunOptions,
+) -> Result<TrainedNetwork, ScenarioError> {
+    let ctx = Ctx { source, variant };
+    let Some(spec) = scenario.observer.training.as_ref() else {
+        return Err(ctx.err(
+            "observer.kind",
+            "needs an [observer.training] table".into(),
+            None,
+        ));
+    };
+    let n = arm_joints.len();
+    let train_src = data_source(&ctx, scenario_file, "observer.training.data", &spec.data)?;
+    let val_src = data_source(
+        &ctx,
+        scenario_file,
+        "observer.training.validation",
+        &spec.validation,
+    )?;
+    let config = BroadConfig {
+        nodes: spec.nodes,
+        friction: if spec.friction_features {
+            FrictionFeatures {
+                columns: (n..2 * n).collect(),
+                scales: spec.friction_scales.clone(),
+            }
+        } else {
+            FrictionFeatures::none()
+        },
+        seed: spec.seed,
+        widths: WidthRule::Knn {
+            k: spec.width_neighbours,
+            scale: spec.width_scale,
+        },
+        ..BroadConfig::default()
+    };
+    // The key: data identities, the target, every fit setting.
+    let target = match (scenario.observer.kind, nominal) {
+        (ObserverKind::Hybrid, Some(_)) => {
+            format!("hybrid:{}", scenario.observer.nominal_inertia_scale)
+        }
+        _ => "learned".to_string(),
+    };
+    let key_text = format!(
+        "v{CACHE_FORMAT_VERSION}|{:016x}|{:016x}|{target}|filter {}|{}|{}",
+        train_src.identity,
+        val_src.identity,
+        scenario.observer.input_filter_hz,
+        serde_json::to_string(&config).unwrap_or_default(),
+        arm_joints.join(","),
+    );
+    let key = fnv1a64(key_text.as_bytes());
+    let stem = format!(
+        "{}-{key:016x}",
+        if target == "learned" {
+            "learned"
+        } else {
+            "hybrid"
+        }
+    );
+    let dir = cache_dir(scenario_file, spec);
+    let model_path = dir.join(format!("{stem}.broad"));
+    let meta_path = dir.join(format!("{stem}.json"));
+    if spec.cache {
+        if let Some(hit) = read_cache(&model_path, &meta_path, &key_text) {
+            return Ok(hit);
+        }
+    }
+
+    let label = variant.unwrap_or("base");
+    let train = load_data(&ctx, &train_src, options)?;
+    let validation = load_data(&ctx, &val_src, options)?;
+    let filter = scenario.observer.input_filter_hz;
+    let (x, y) = arrays(&ctx, &train, train_src.key, arm_joints, nominal, filter)?;
+    let (xv, yv) = arrays(&ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
+    let learn_err = |e: admittance_learning::broad::BroadError| {
+        ctx.err("observer.training", e.to_string(), None)
+    };
+    let train_set = Dataset::new(&x, &y, 3 * n, n).map_err(learn_err)?;
+    let val_set = Dataset::new(&xv, &yv, 3 * n, n).map_err(learn_err)?;
+    options.report(label, Stage::Train, 0, 1);
+    let started = Instant::now();
+    let (model, report) = fit(&train_set, Some(&val_set), &config).map_err(learn_err)?;
+    let train_seconds = started.elapsed().as_secs_f64();
+    options.report(label, Stage::Train, 1, 1);
+    let trained = TrainedNetwork {
+        model,
+        train_seconds,
+        validation_nrmse: report.validation_nrmse.clone(),
+        samples: report.samples,
+        validation_samples: report.validation_samples,
+        lambda: report.lambda,
+        cached: false,
+    };
+    if spec.cache {
+        // A cache that cannot be written costs a retrain next time, nothing else.
+        let _ = write_cache(&dir, &model_path, &meta_path, &key_text, &trained);
+    }
+    Ok(trained)
+}
+
+fn read_cache(model_path: &Path, meta_path: &Path, key_text: &str) -> Option<TrainedNetwork> {
+    let meta: Value = serde_json::from_slice(&std::fs::read(meta_path).ok()?).ok()?;
+    if meta.get("format")?.as_str()? != "admittance-observer-cache"
+        || meta.get("format_version")?.as_u64()? != CACHE_FORMAT_VERSION as u64
+        || meta.get("key")?.as_str()? != key_text
+    {
+        return None;
+    }
+    // A corrupted or truncated model file fails its checksum: retrain.
+    let model = BroadModel::load(model_path).ok()?;
+    let nrmse: Vec<f64> = meta
+        .get("validation_nrmse")?
+        .as_array()?
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
+    Some(TrainedNetwork {
+        model,
+        train_seconds: meta.get("train_seconds")?.as_f64()?,
+        validation_nrmse: nrmse,
+        samples: meta.get("samples")?.as_u64()? as usize,
+        validation_samples: meta.get("validation_samples")?.as_u64()? as usize,
+        lambda: meta.get("lambda")?.as_f64()?,
+        cached: true,
+    })
+}
+
+fn write_cache(
+    dir: &Path,
+    model_path: &Path,
+    meta_path: &Path,
+    key_text: &str,
+    t: &TrainedNetwork,
+) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+    t.model.save(model_path).map_err(|e| e.to_string())?;
+    let meta = json!({
+        "format": "admittance-observer-cache",
+        "format_version": CACHE_FORMAT_VERSION,
+        "key": key_text,
+        "train_seconds": t.train_seconds,
+        "validation_nrmse": t.validation_nrmse,
+        "samples": t.samples,
+        "validation_samples": t.validation_samples,
+        "lambda": t.lambda,
+    });
+    write_atomic(
+        meta_path,
+        serde_json::to_string_pretty(&meta)
+            .unwrap_or_default()
+            .as_bytes(),
+    )
+    .map_err(|e| e.to_string())
+}
