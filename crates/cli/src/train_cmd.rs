@@ -32,6 +32,11 @@ pub struct TrainArgs {
     /// Add friction-shaped inputs tanh(qdot / v) (METHOD.md section 7).
     #[arg(long)]
     friction_features: bool,
+    /// Second low-pass (Hz) on q and tau before differentiating again, the observer input
+    /// conditioning of the scenarios (`observer.input_filter_hz`); 0: the columns as recorded.
+    /// The observer must be fed the same conditioning at run time (`admittance_sim::InputConditioner`).
+    #[arg(long, default_value_t = 0.0)]
+    input_filter_hz: f64,
     /// Fraction of the rows, at the end, held out for validation.
     #[arg(long, default_value_t = 0.2)]
     validation_fraction: f64,
@@ -60,6 +65,9 @@ pub struct GrowArgs {
     /// The validation fraction used by `train`.
     #[arg(long, default_value_t = 0.2)]
     validation_fraction: f64,
+    /// The input filter used by `train`.
+    #[arg(long, default_value_t = 0.0)]
+    input_filter_hz: f64,
     /// Seed of the new centres.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -71,21 +79,10 @@ pub struct GrowArgs {
     quiet: bool,
 }
 
-/// `(inputs, targets)` row-major: `[q, qdot, qddot]` and `tau`.
-fn arrays(data: &FreeMotionData) -> (Vec<f64>, Vec<f64>) {
-    let n = data.dof();
-    let mut x = Vec::with_capacity(data.len() * 3 * n);
-    for k in 0..data.len() {
-        for s in [&data.q, &data.qdot, &data.qddot] {
-            x.extend_from_slice(&s[k * n..(k + 1) * n]);
-        }
-    }
-    (x, data.tau.clone())
-}
-
 fn load_split(
     path: &Path,
     fraction: f64,
+    input_filter_hz: f64,
 ) -> Result<(FreeMotionData, Vec<f64>, Vec<f64>, usize), CliError> {
     if !(fraction > 0.0 && fraction < 1.0) {
         return Err(CliError::usage(format!(
@@ -101,7 +98,13 @@ fn load_split(
             data.len()
         )));
     }
-    let (x, y) = arrays(&data);
+    // `[q, qdot, qddot]` and `tau`, row-major, conditioned as at run time.
+    let (x, y) = admittance_sim::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
+        CliError::usage(format!(
+            "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
+            path.display()
+        ))
+    })?;
     Ok((data, x, y, train_rows))
 }
 
@@ -121,7 +124,8 @@ fn fmt_list(v: &[f64]) -> String {
 
 pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     let model = crate::dynamics_cmd::load(&args.chain)?;
-    let (data, x, y, train_rows) = load_split(&args.data, args.validation_fraction)?;
+    let (data, x, y, train_rows) =
+        load_split(&args.data, args.validation_fraction, args.input_filter_hz)?;
     let joints: Vec<&str> = model.joint_names().collect();
     if data
         .joints
@@ -185,7 +189,8 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
 
 pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
     let mut net = BroadModel::load(&args.model).map_err(|e| CliError::input(e.to_string()))?;
-    let (data, x, y, train_rows) = load_split(&args.data, args.validation_fraction)?;
+    let (data, x, y, train_rows) =
+        load_split(&args.data, args.validation_fraction, args.input_filter_hz)?;
     let n = data.dof();
     if net.d_in() != 3 * n || net.d_out() != n {
         return Err(CliError::input(format!(

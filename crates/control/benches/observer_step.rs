@@ -83,7 +83,7 @@ fn bench_observer(c: &mut Criterion, name: &str, observer: &mut dyn Observer) {
             };
             let status = observer.update(black_box(&input), 1e-3, &mut estimate);
             k += 1;
-            black_box((status, &estimate));
+            let _ = black_box((status, &estimate));
         })
     });
 }

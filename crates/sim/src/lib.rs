@@ -37,7 +37,7 @@ pub mod plant;
 pub mod scenario;
 pub mod sensors;
 
-pub use conditioning::InputConditioner;
+pub use conditioning::{observer_training_arrays, InputConditioner};
 pub use environment::{
     Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
     TipForceProfileConfig, WallConfig,

@@ -239,40 +239,13 @@ fn arrays(
         ));
     }
     let n = data.dof();
-    let mut x = Vec::with_capacity(data.len() * 3 * n);
-    let mut y = Vec::with_capacity(data.len() * n);
-    if input_filter_hz > 0.0 {
-        // The observer's second filter stage, as at run time (conditioning.rs): the
-        // data's q and tau through it, q differentiated again.
-        let span = data.t.last().copied().unwrap_or(0.0) - data.t.first().copied().unwrap_or(0.0);
-        let rate = if data.len() > 1 && span > 0.0 {
-            (data.len() - 1) as f64 / span
-        } else {
-            0.0
-        };
-        let mut c = crate::InputConditioner::new(n, input_filter_hz, rate).map_err(|e| {
-            ctx.err(
-                "observer.input_filter_hz",
-                format!("with the data's sample rate {rate:.1} Hz: {e}"),
-                None,
-            )
-        })?;
-        for k in 0..data.len() {
-            let r = k * n..(k + 1) * n;
-            c.update(&data.q[r.clone()], &data.tau[r]);
-            for s in [&c.q, &c.qdot, &c.qddot] {
-                x.extend_from_slice(s);
-            }
-            y.extend_from_slice(&c.tau);
-        }
-    } else {
-        for k in 0..data.len() {
-            for s in [&data.q, &data.qdot, &data.qddot] {
-                x.extend_from_slice(&s[k * n..(k + 1) * n]);
-            }
-        }
-        y.extend_from_slice(&data.tau);
-    }
+    let (x, mut y) = crate::observer_training_arrays(data, input_filter_hz).map_err(|e| {
+        ctx.err(
+            "observer.input_filter_hz",
+            format!("with the data of {key}: {e}"),
+            None,
+        )
+    })?;
     if let Some(model) = nominal {
         let mut d = Data::new(model);
         for k in 0..data.len() {
