@@ -32,22 +32,84 @@ pub const PAPER_FIGURES: &[PaperFigure] = &[
     PaperFigure { number: 12, scenario: "deadzone", caption: "The control inputs of joint s0.", data: "tau_cmd.s0, tau_applied.s0 and the deadzone band (nn_compensated, nn_uncompensated)" },
     PaperFigure { number: 13, scenario: "admittance", caption: "The free-motion training trajectory.", data: "q.* of a run of scenario free_motion" },
     PaperFigure { number: 14, scenario: "admittance", caption: "The validation trajectory.", data: "q.* of a run of scenario free_motion_validation" },
-    PaperFigure { number: 15, scenario: "admittance", caption: "The validation performance with proposed observer.", data: "the observer's torque prediction on the validation rows (not recorded)" },
+    PaperFigure { number: 15, scenario: "admittance", caption: "The validation performance with proposed observer.", data: "target.* and prediction.* of validation_VARIANT.csv (the paper's `learned` first)" },
     PaperFigure { number: 16, scenario: "admittance", caption: "The test trajectory.", data: "q.* of the run" },
     PaperFigure { number: 17, scenario: "admittance", caption: "The test performance with proposed observer.", data: "tau_ext.s0 and tau_ext_hat.s0, one panel per variant" },
     PaperFigure { number: 18, scenario: "admittance", caption: "The trajectory adaptation of joint s0.", data: "q_d.s0 and q_r.s0 of every variant" },
     PaperFigure { number: 19, scenario: "admittance", caption: "The trajectory tracking of joint s0.", data: "q_r.s0 and q.s0 of every variant" },
     PaperFigure { number: 20, scenario: "admittance", caption: "The performance of trajectory constraint.", data: "q_r.s0 against the saturation bounds centre +- half_range of scenario.toml" },
     PaperFigure { number: 21, scenario: "dynamic_nodes", caption: "The function approximation with 512 NN nodes and 304 NN nodes.", data: "f.s0, f_hat.s0 in the windows before discard and before growth (nodes.f finds them)" },
-    PaperFigure { number: 22, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 512 NN nodes.", data: "per-node weights (not recorded)" },
-    PaperFigure { number: 23, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 304 NN nodes.", data: "per-node weights (not recorded)" },
+    PaperFigure { number: 22, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 512 NN nodes.", data: "w.ID of weights_VARIANT.csv (norm of each node's weight row)" },
+    PaperFigure { number: 23, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 304 NN nodes.", data: "w.ID of weights_VARIANT.csv (norm of each node's weight row)" },
     PaperFigure { number: 24, scenario: "dynamic_nodes", caption: "The function approximation with dynamic RBFNN learning framework.", data: "f.s0, f_hat.s0 in the last window, after growth" },
-    PaperFigure { number: 25, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 304 NN nodes under dynamic RBFNN learning framework.", data: "per-node weights (not recorded)" },
-    PaperFigure { number: 26, scenario: "dynamic_nodes", caption: "The convergence of NN weight of 100 new NN nodes.", data: "per-node weights (not recorded)" },
+    PaperFigure { number: 25, scenario: "dynamic_nodes", caption: "The convergence of NN weight with 304 NN nodes under dynamic RBFNN learning framework.", data: "w.ID of weights_VARIANT.csv (norm of each node's weight row)" },
+    PaperFigure { number: 26, scenario: "dynamic_nodes", caption: "The convergence of NN weight of 100 new NN nodes.", data: "w.ID of weights_VARIANT.csv (norm of each node's weight row)" },
 ];
 
 /// Why the weight figures cannot be drawn.
-const NO_WEIGHTS: &str = "the run records no per-node weights (only the node count `nodes.f` and the norms `weight_norm_final`, `weight_norm_max` in summary.json)";
+const NO_WEIGHTS: &str = "the run folder has no weights_VARIANT.csv (per-node weight norms; written by runs with dynamic nodes)";
+
+/// Which nodes a weight figure shows.
+#[derive(Clone, Copy)]
+enum NodeSelection {
+    /// Nodes that existed at the start of the run.
+    Initial,
+    /// Nodes that did not exist at the start (grown).
+    New,
+}
+
+/// A weight-convergence panel (Figs 22, 23, 25, 26): the norm of each selected node's
+/// weight row over `[from, to]`, for the nodes that exist throughout that window.
+fn weights_panel(
+    table: &crate::table::Table,
+    range: (f64, f64),
+    select: NodeSelection,
+    what: &str,
+) -> Result<Panel, String> {
+    let t = table
+        .col("t")
+        .ok_or("column `t` is not in the weights file")?;
+    let rows: Vec<usize> = (0..t.len())
+        .filter(|&k| t[k] >= range.0 && t[k] <= range.1)
+        .collect();
+    let (Some(&first), Some(&last)) = (rows.first(), rows.last()) else {
+        return Err(format!(
+            "no weight samples between {:.1} and {:.1} s",
+            range.0, range.1
+        ));
+    };
+    let mut lines = Vec::new();
+    for name in table.columns.iter().filter(|c| c.starts_with("w.")) {
+        let Some(w) = table.col(name) else { continue };
+        let initial = w.first().is_some_and(|v| v.is_finite());
+        let wanted = match select {
+            NodeSelection::Initial => initial,
+            NodeSelection::New => !initial,
+        };
+        if !wanted || !w[first].is_finite() || !w[last].is_finite() {
+            continue;
+        }
+        let (x, y): (Vec<f64>, Vec<f64>) = rows
+            .iter()
+            .filter(|&&k| w[k].is_finite())
+            .map(|&k| (t[k], w[k]))
+            .unzip();
+        lines.push(line("", &x, &y, lines.len() % 8, true));
+    }
+    if lines.is_empty() {
+        return Err(format!(
+            "no {what} exist from {:.1} to {:.1} s",
+            range.0, range.1
+        ));
+    }
+    let mut p = panel(
+        format!("{} {what}, {:.0}-{:.0} s", lines.len(), range.0, range.1),
+        "|W_i| (weight row norm)",
+        lines,
+    );
+    p.x_range = Some(range);
+    Ok(p)
+}
 
 /// One line of a panel.
 #[derive(Clone, Debug)]
@@ -545,6 +607,57 @@ fn free_motion_angles(folder: &RunFolder) -> Option<(String, &crate::table::Tabl
         })
 }
 
+/// Fig 15: the network of a learned observer on its validation data, one panel per joint
+/// (the paper's `learned` variant when the run has it).
+fn validation_figure(folder: &RunFolder) -> Result<Figure, String> {
+    let (name, table) = folder
+        .observer_validation
+        .iter()
+        .find(|(n, _)| n == "learned")
+        .or(folder.observer_validation.first())
+        .ok_or("no validation_VARIANT.csv in the folder: it is written by runs with a learned observer (scenario admittance)")?;
+    let t = table
+        .col("t")
+        .ok_or(format!("column `t` is not in validation_{name}.csv"))?;
+    let what = if name == "hybrid" {
+        "nominal-model residual"
+    } else {
+        "torque"
+    };
+    let mut panels = Vec::new();
+    for j in &folder.joints {
+        let get = |c: String| {
+            table
+                .col(&c)
+                .ok_or(format!("column `{c}` is not in validation_{name}.csv"))
+        };
+        panels.push(panel(
+            format!("joint {j}, variant {name}"),
+            "torque (N m)",
+            vec![
+                line(
+                    format!("{what} (validation data)"),
+                    t,
+                    get(format!("target.{j}"))?,
+                    1,
+                    false,
+                ),
+                line(
+                    "network prediction",
+                    t,
+                    get(format!("prediction.{j}"))?,
+                    0,
+                    true,
+                ),
+            ],
+        ));
+    }
+    Ok(figure(
+        "Fig. 15: the observer's network on the validation data",
+        panels,
+    ))
+}
+
 fn plan_b(folder: &RunFolder, run: BRun) -> Vec<Planned> {
     let angles = |title: &str, wanted: BRun, elsewhere: &str| -> Result<Figure, String> {
         let found = if run == wanted {
@@ -574,7 +687,11 @@ fn plan_b(folder: &RunFolder, run: BRun) -> Vec<Planned> {
         BRun::Validation,
         "the validation data are in the folder of `admittance run scenarios/free_motion_validation.toml`",
     )));
-    out.push(planned(15, "validation_performance", Err("the observer's predictions on the validation data are not written to any run folder (summary.json of an admittance run and `admittance train` give the validation NRMSE)".into())));
+    out.push(planned(
+        15,
+        "validation_performance",
+        validation_figure(folder),
+    ));
     if run != BRun::Admittance {
         return out;
     }
@@ -838,9 +955,48 @@ fn plan_c(folder: &RunFolder) -> Vec<Planned> {
             ))
         })(),
     )];
-    for n in [22, 23] {
-        out.push(planned(n, "weights", Err(NO_WEIGHTS.into())));
-    }
+    let weights = || -> Result<(&crate::table::Table, f64, Option<f64>, f64), String> {
+        let (v, discard, grow, end) = events()?;
+        let table = folder
+            .node_weights
+            .iter()
+            .find(|(name, _)| *name == v.name)
+            .map(|(_, t)| t)
+            .ok_or(NO_WEIGHTS)?;
+        Ok((table, discard, grow, end))
+    };
+    out.push(planned(
+        22,
+        "weights_initial",
+        (|| {
+            let (table, discard, _, _) = weights()?;
+            Ok(figure(
+                "Fig. 22: weights of the initial nodes until the discard",
+                vec![weights_panel(
+                    table,
+                    (0.0, discard - 1e-6), // the last sample before the discard
+                    NodeSelection::Initial,
+                    "initial nodes",
+                )?],
+            ))
+        })(),
+    ));
+    out.push(planned(
+        23,
+        "weights_after_discard",
+        (|| {
+            let (table, discard, grow, end) = weights()?;
+            Ok(figure(
+                "Fig. 23: weights of the nodes kept by the discard",
+                vec![weights_panel(
+                    table,
+                    (discard, grow.unwrap_or(end)),
+                    NodeSelection::Initial,
+                    "kept nodes",
+                )?],
+            ))
+        })(),
+    ));
     out.push(planned(
         24,
         "approximation_growth",
@@ -860,27 +1016,80 @@ fn plan_c(folder: &RunFolder) -> Vec<Planned> {
             ))
         })(),
     ));
-    for n in [25, 26] {
-        out.push(planned(n, "weights", Err(NO_WEIGHTS.into())));
-    }
-    for p in out
-        .iter_mut()
-        .filter(|p| p.figure.is_err() && p.stem.ends_with("_weights"))
-    {
-        p.stem = format!("fig{}_weights", p.id);
-    }
+    out.push(planned(
+        25,
+        "weights_kept_after_growth",
+        (|| {
+            let (table, _, grow, end) = weights()?;
+            let grow = grow.ok_or("`nodes.f` never rises: no nodes were grown in this run")?;
+            Ok(figure(
+                "Fig. 25: weights of the kept initial nodes while and after nodes grow",
+                vec![weights_panel(
+                    table,
+                    (grow, end),
+                    NodeSelection::Initial,
+                    "kept initial nodes",
+                )?],
+            ))
+        })(),
+    ));
+    out.push(planned(
+        26,
+        "weights_new_nodes",
+        (|| {
+            let (table, _, grow, end) = weights()?;
+            let grow = grow.ok_or("`nodes.f` never rises: no nodes were grown in this run")?;
+            // New nodes appear one by one from `grow` on: show them once they all exist.
+            let w_t = table
+                .col("t")
+                .ok_or("column `t` is not in the weights file")?;
+            let all_added = table
+                .columns
+                .iter()
+                .filter(|c| c.starts_with("w."))
+                .filter_map(|c| table.col(c))
+                .filter(|w| !w.first().is_some_and(|v| v.is_finite()))
+                .filter_map(|w| w.iter().position(|v| v.is_finite()).map(|k| w_t[k]))
+                .fold(grow, f64::max);
+            Ok(figure(
+                "Fig. 26: weights of the grown nodes",
+                vec![weights_panel(
+                    table,
+                    (all_added, end),
+                    NodeSelection::New,
+                    "grown nodes",
+                )?],
+            ))
+        })(),
+    ));
     out.push(Planned {
         id: "S1".into(),
         stem: "s1_node_count".into(),
-        caption: "Node count of the f network over the run (not in the paper; what stands in for Figs 22-26).".into(),
+        caption: "Node count of the f network over the run (not in the paper).".into(),
         data: "nodes.f".into(),
         figure: (|| {
             let (v, discard, grow, _) = events()?;
             let t = col(v, "t")?;
-            let mut p = panel(format!("variant {}", v.name), "nodes", vec![line("nodes of the f network", t, col(v, "nodes.f")?, 0, false)]);
-            p.vlines.push(Marker { at: discard, label: format!("discard at {discard:.1} s") });
+            let mut p = panel(
+                format!("variant {}", v.name),
+                "nodes",
+                vec![line(
+                    "nodes of the f network",
+                    t,
+                    col(v, "nodes.f")?,
+                    0,
+                    false,
+                )],
+            );
+            p.vlines.push(Marker {
+                at: discard,
+                label: format!("discard at {discard:.1} s"),
+            });
             if let Some(g) = grow {
-                p.vlines.push(Marker { at: g, label: format!("growth from {g:.1} s") });
+                p.vlines.push(Marker {
+                    at: g,
+                    label: format!("growth from {g:.1} s"),
+                });
             }
             Ok(figure("Node count of the f network", vec![p]))
         })(),
@@ -982,6 +1191,8 @@ mod tests {
                     .unwrap(),
             ),
             free_motion: Vec::new(),
+            node_weights: Vec::new(),
+            observer_validation: Vec::new(),
         }
     }
 
@@ -1168,6 +1379,47 @@ mod tests {
             assert!(plan.iter().find(|p| p.id == n).unwrap().figure.is_err());
         }
         assert!(plan.iter().find(|p| p.id == "24").unwrap().figure.is_ok());
+
+        // With per-node weights: 4 initial nodes, 2 of them discarded at 40 s, 3 grown at
+        // 60, 61 and 62 s.
+        let mut f = f;
+        let nan = f64::NAN;
+        let w = |alive: &dyn Fn(f64) -> bool| -> Vec<f64> {
+            t.iter()
+                .map(|&x| if alive(x) { 0.1 * x } else { nan })
+                .collect()
+        };
+        let mut names = vec!["t".to_string()];
+        let mut cols = vec![t.clone()];
+        for id in 0..4 {
+            names.push(format!("w.{id}"));
+            cols.push(w(&|x| id < 2 || x < 40.0));
+        }
+        for (id, from) in [(4, 60.0), (5, 61.0), (6, 62.0)] {
+            names.push(format!("w.{id}"));
+            cols.push(w(&|x| x >= from));
+        }
+        f.node_weights = vec![("dynamic".into(), Table::from_columns(names, cols))];
+        let with_weights = super::plan(&f, Err("unused".into()));
+        let lines = |id: &str| -> usize {
+            let fig = with_weights.iter().find(|p| p.id == id).unwrap();
+            fig.figure
+                .as_ref()
+                .map_err(|e| format!("{id}: {e}"))
+                .unwrap()
+                .panels[0]
+                .lines
+                .len()
+        };
+        assert_eq!(lines("22"), 4, "all initial nodes until the discard");
+        assert_eq!(lines("23"), 2, "the kept nodes");
+        assert_eq!(lines("25"), 2, "the kept nodes after growth");
+        assert_eq!(lines("26"), 3, "the grown nodes");
+        let fig26 = with_weights.iter().find(|p| p.id == "26").unwrap();
+        assert_eq!(
+            fig26.figure.as_ref().unwrap().panels[0].x_range,
+            Some((62.0, 99.0))
+        );
     }
 
     #[test]
@@ -1201,6 +1453,23 @@ mod tests {
         );
         let ids: Vec<&str> = admittance.iter().map(|p| p.id.as_str()).collect();
         assert_eq!(ids, ["13", "14", "15", "16", "17", "18", "19", "20"]);
+        assert!(admittance[2].figure.is_err(), "no validation file yet");
+        // With the learned observer's validation predictions: one panel per joint.
+        let mut with_validation = folder("admittance", &[("learned", table(&[], &[], 5))]);
+        let columns: Vec<String> = std::iter::once("t".to_string())
+            .chain(J.iter().map(|j| format!("target.{j}")))
+            .chain(J.iter().map(|j| format!("prediction.{j}")))
+            .collect();
+        let data = (0..columns.len())
+            .map(|c| (0..10).map(|k| (k * c) as f64).collect())
+            .collect();
+        with_validation.observer_validation =
+            vec![("learned".into(), Table::from_columns(columns, data))];
+        let fig15 = super::plan(&with_validation, Err("unused".into()));
+        let fig15 = fig15.iter().find(|p| p.id == "15").unwrap();
+        let panels = &fig15.figure.as_ref().unwrap().panels;
+        assert_eq!(panels.len(), J.len());
+        assert_eq!(panels[1].lines.len(), 2);
         // The learned observer (the paper's) comes first.
         let fig17 = admittance[4].figure.as_ref().unwrap();
         assert!(

@@ -39,6 +39,12 @@ pub struct RunFolder {
     pub scenario_toml: Option<toml::Table>,
     /// Free-motion recordings (`free_motion.csv`, `free_motion_VARIANT.csv`): file name and data.
     pub free_motion: Vec<(String, Table)>,
+    /// Per-node weight norms of the f network (`weights_VARIANT.csv`, runs with dynamic
+    /// nodes): variant name and data.
+    pub node_weights: Vec<(String, Table)>,
+    /// Learned observers' networks on their validation data (`validation_VARIANT.csv`):
+    /// variant name and data.
+    pub observer_validation: Vec<(String, Table)>,
 }
 
 fn input(path: &Path, message: impl Into<String>) -> ReportError {
@@ -156,6 +162,20 @@ impl RunFolder {
             let keep = |c: &str| c == "t" || c.starts_with("q.");
             free_motion.push((n.clone(), Table::load_columns(&dir.join(&n), &keep)?));
         }
+        let mut node_weights = Vec::new();
+        for v in &variants {
+            let path = dir.join(format!("weights_{}.csv", v.name));
+            if path.is_file() {
+                node_weights.push((v.name.clone(), Table::load_columns(&path, &|_| true)?));
+            }
+        }
+        let mut observer_validation = Vec::new();
+        for v in &variants {
+            let path = dir.join(format!("validation_{}.csv", v.name));
+            if path.is_file() {
+                observer_validation.push((v.name.clone(), Table::load_columns(&path, &|_| true)?));
+            }
+        }
         Ok(Self {
             dir: dir.to_path_buf(),
             scenario,
@@ -163,6 +183,8 @@ impl RunFolder {
             variants,
             scenario_toml,
             free_motion,
+            node_weights,
+            observer_validation,
         })
     }
 

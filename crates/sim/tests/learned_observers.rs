@@ -94,6 +94,10 @@ fn learned_variants_train_validate_cache_and_estimate() {
         assert_eq!(r.metrics["observer_model_cached"], Value::Bool(false));
         let v = per_joint(r, "validation_nrmse");
         assert_eq!(v.len(), 7);
+        // The network on the validation data (Fig 15): 12 s at 1 kHz, every 10th sample.
+        let series = r.observer_validation.as_ref().expect("validation series");
+        assert_eq!(series.columns.len(), 1 + 2 * 7);
+        assert_eq!(series.rows.len(), 1200);
         assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0), "{v:?}");
     }
     for r in [&learned, &friction, &hybrid, &momentum] {

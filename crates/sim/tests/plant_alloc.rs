@@ -6,7 +6,7 @@
 mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::cell::Cell;
 
 use admittance_dynamics::{forward_kinematics, Data};
 use admittance_sim::*;
@@ -14,23 +14,33 @@ use common::*;
 
 struct Counting;
 
-static COUNTING: AtomicBool = AtomicBool::new(false);
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+// Per thread: the test harness's own threads may allocate at any time (a global count
+// made this test flaky); only the thread that runs the loop is watched.
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn bump() {
+    if COUNTING.try_with(Cell::get).unwrap_or(false) {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+    }
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.load(Ordering::SeqCst) {
-            ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        }
+        bump();
         unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        bump();
+        unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if COUNTING.load(Ordering::SeqCst) {
-            ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        }
+        bump();
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -127,8 +137,8 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
             let mut tau = [0.0; 7];
             // One period outside the count (nothing is lazily allocated, but be fair).
             plant.step_control(&tau).unwrap();
-            ALLOCATIONS.store(0, Ordering::SeqCst);
-            COUNTING.store(true, Ordering::SeqCst);
+            ALLOCATIONS.with(|c| c.set(0));
+            COUNTING.with(|c| c.set(true));
             for k in 0..250 {
                 if k == 100 {
                     tau[2] = f64::NAN;
@@ -146,8 +156,8 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
                 }
                 std::hint::black_box(plant.energy());
             }
-            COUNTING.store(false, Ordering::SeqCst);
-            let count = ALLOCATIONS.load(Ordering::SeqCst);
+            COUNTING.with(|c| c.set(false));
+            let count = ALLOCATIONS.with(Cell::get);
             assert_eq!(
                 count, 0,
                 "{integrator} / {solver:?}: {count} allocations in 250 control periods"
@@ -158,4 +168,10 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
             );
         }
     }
+    // The counter itself sees this thread's allocations.
+    ALLOCATIONS.with(|c| c.set(0));
+    COUNTING.with(|c| c.set(true));
+    drop(std::hint::black_box(vec![1u8; 16]));
+    COUNTING.with(|c| c.set(false));
+    assert!(ALLOCATIONS.with(Cell::get) > 0);
 }

@@ -203,6 +203,12 @@ pub fn run_scenario(
                 };
                 write_series_csv(&partial.join(name), fm)?;
             }
+            if let Some(w) = &run.node_weights {
+                write_series_csv(&partial.join(format!("weights_{}.csv", run.name)), w)?;
+            }
+            if let Some(v) = &run.observer_validation {
+                write_series_csv(&partial.join(format!("validation_{}.csv", run.name)), v)?;
+            }
             let metrics: serde_json::Map<String, Value> = run
                 .metrics
                 .iter()

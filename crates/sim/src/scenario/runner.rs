@@ -108,6 +108,60 @@ pub struct VariantRun {
     /// The free-motion recording (`[record] free_motion_csv = true`): one row per control
     /// sample, columns `t, q.*, qdot.*, qddot.*, tau.*` (docs/outputs.md).
     pub free_motion: Option<TimeSeries>,
+    /// With dynamic nodes: the norm of each f-network node's weight row, every
+    /// [`NODE_WEIGHT_INTERVAL`] seconds; columns `t, w.ID` where `ID` numbers the nodes in
+    /// the order they first appeared (the initial nodes first, grown ones after), `NaN`
+    /// while a node does not exist (before it is grown or after it is discarded).
+    pub node_weights: Option<TimeSeries>,
+    /// With a learned observer: its network on the validation data
+    /// (`training::TrainedNetwork::validation_series`).
+    pub observer_validation: Option<TimeSeries>,
+}
+
+/// Sampling interval (s) of [`VariantRun::node_weights`].
+pub const NODE_WEIGHT_INTERVAL: f64 = 0.25;
+
+/// Follows the f network's nodes by their centres (indices shift when nodes are
+/// discarded) and samples their weight-row norms.
+#[derive(Default)]
+struct NodeWeightTrace {
+    ids: std::collections::HashMap<Vec<u64>, usize>,
+    samples: Vec<(f64, Vec<(usize, f64)>)>,
+}
+
+impl NodeWeightTrace {
+    fn sample(&mut self, t: f64, layer: &admittance_control::GaussianRbfLayer) {
+        let mut row = Vec::with_capacity(layer.len());
+        for i in 0..layer.len() {
+            let (Some(centre), Some(w)) = (layer.centre(i), layer.weight_row(i)) else {
+                continue;
+            };
+            let key: Vec<u64> = centre.iter().map(|c| c.to_bits()).collect();
+            let next = self.ids.len();
+            let id = *self.ids.entry(key).or_insert(next);
+            row.push((id, w.iter().map(|x| x * x).sum::<f64>().sqrt()));
+        }
+        self.samples.push((t, row));
+    }
+
+    fn into_series(self) -> TimeSeries {
+        let count = self.ids.len();
+        let mut columns = vec!["t".to_string()];
+        columns.extend((0..count).map(|id| format!("w.{id}")));
+        let rows = self
+            .samples
+            .into_iter()
+            .map(|(t, values)| {
+                let mut row = vec![f64::NAN; count + 1];
+                row[0] = t;
+                for (id, v) in values {
+                    row[id + 1] = v;
+                }
+                row
+            })
+            .collect();
+        TimeSeries { columns, rows }
+    }
 }
 
 /// A controller of any kind, keeping the neural one reachable for its node hooks.
@@ -387,6 +441,7 @@ pub fn run_variant(
             })
     };
     let mut observer_metrics: BTreeMap<String, Value> = BTreeMap::new();
+    let mut observer_validation = None;
     let mut observer: Option<Box<dyn Observer>> = match scenario.observer.kind {
         ObserverKind::None | ObserverKind::Oracle => None,
         ObserverKind::Momentum => Some(Box::new(
@@ -418,6 +473,7 @@ pub fn run_variant(
             observer_metrics.insert("observer_model_cached".into(), json!(net.cached));
             observer_metrics.insert("training_samples".into(), json!(net.samples));
             observer_metrics.insert("observer_lambda".into(), json!(net.lambda));
+            observer_validation = net.validation_series.clone();
             let observer_err = |e: admittance_control::ConfigError| {
                 source.error_at("observer.training", variant, e.to_string(), None)
             };
@@ -544,6 +600,8 @@ pub fn run_variant(
     let timing_stride = (steps / 200_000).max(1);
     let (mut faults, mut limit_violations, mut nonfinite_torques) = (0usize, 0usize, 0usize);
     let mut max_weight_norm: f64 = 0.0;
+    let mut weight_trace = dynamic.as_ref().map(|_| NodeWeightTrace::default());
+    let weight_stride = ((NODE_WEIGHT_INTERVAL / dt).round() as usize).max(1);
 
     let variant_name = variant.unwrap_or("base");
     let progress_stride = (steps / 100).max(1);
@@ -711,6 +769,11 @@ pub fn run_variant(
                 }
             }
             max_weight_norm = max_weight_norm.max(nn.weight_norm(NetworkId::F));
+            if let (Some(trace), Some(layer)) = (weight_trace.as_mut(), nn.network(NetworkId::F)) {
+                if k % weight_stride == 0 {
+                    trace.sample(t, layer);
+                }
+            }
         }
 
         if let Some(sat) = admittance.as_ref().and_then(|a| a.saturation()) {
@@ -831,5 +894,7 @@ pub fn run_variant(
         series,
         joints,
         free_motion,
+        node_weights: weight_trace.map(NodeWeightTrace::into_series),
+        observer_validation,
     })
 }

@@ -45,6 +45,41 @@ pub struct TrainedNetwork {
     pub lambda: f64,
     /// Whether it came from the cache.
     pub cached: bool,
+    /// The network on the validation data (the paper's Fig 15), every
+    /// [`VALIDATION_DECIMATION`]-th sample: columns `t`, `target.JOINT` (what the network
+    /// learns: the torque for `learned`, the nominal model's residual for `hybrid`) and
+    /// `prediction.JOINT`.
+    pub validation_series: Option<super::runner::TimeSeries>,
+}
+
+/// Decimation of [`TrainedNetwork::validation_series`].
+pub const VALIDATION_DECIMATION: usize = 10;
+
+fn validation_series(
+    model: &BroadModel,
+    t: &[f64],
+    x: &[f64],
+    y: &[f64],
+    joints: &[String],
+) -> Option<super::runner::TimeSeries> {
+    let n = joints.len();
+    let mut columns = vec!["t".to_string()];
+    columns.extend(joints.iter().map(|j| format!("target.{j}")));
+    columns.extend(joints.iter().map(|j| format!("prediction.{j}")));
+    let mut ws = model.workspace();
+    let mut out = vec![0.0; n];
+    let mut rows = Vec::with_capacity(t.len() / VALIDATION_DECIMATION + 1);
+    for k in (0..t.len()).step_by(VALIDATION_DECIMATION) {
+        model
+            .predict_into(&x[3 * n * k..3 * n * (k + 1)], &mut out, &mut ws)
+            .ok()?;
+        let mut row = Vec::with_capacity(1 + 2 * n);
+        row.push(t[k]);
+        row.extend_from_slice(&y[n * k..n * (k + 1)]);
+        row.extend_from_slice(&out);
+        rows.push(row);
+    }
+    Some(super::runner::TimeSeries { columns, rows })
 }
 
 /// Free-motion data simulated in this process, by identity (a run with several learned
@@ -338,18 +373,20 @@ pub(crate) fn observer_network(
     let dir = cache_dir(scenario_file, spec);
     let model_path = dir.join(format!("{stem}.broad"));
     let meta_path = dir.join(format!("{stem}.json"));
+    let filter = scenario.observer.input_filter_hz;
+    let validation = load_data(&ctx, &val_src, options)?;
+    let (xv, yv) = arrays(&ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
     if spec.cache {
-        if let Some(hit) = read_cache(&model_path, &meta_path, &key_text) {
+        if let Some(mut hit) = read_cache(&model_path, &meta_path, &key_text) {
+            hit.validation_series =
+                validation_series(&hit.model, &validation.t, &xv, &yv, arm_joints);
             return Ok(hit);
         }
     }
 
     let label = variant.unwrap_or("base");
     let train = load_data(&ctx, &train_src, options)?;
-    let validation = load_data(&ctx, &val_src, options)?;
-    let filter = scenario.observer.input_filter_hz;
     let (x, y) = arrays(&ctx, &train, train_src.key, arm_joints, nominal, filter)?;
-    let (xv, yv) = arrays(&ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
     let learn_err = |e: admittance_learning::broad::BroadError| {
         ctx.err("observer.training", e.to_string(), None)
     };
@@ -368,11 +405,15 @@ pub(crate) fn observer_network(
         validation_samples: report.validation_samples,
         lambda: report.lambda,
         cached: false,
+        validation_series: None,
     };
     if spec.cache {
         // A cache that cannot be written costs a retrain next time, nothing else.
         let _ = write_cache(&dir, &model_path, &meta_path, &key_text, &trained);
     }
+    let mut trained = trained;
+    trained.validation_series =
+        validation_series(&trained.model, &validation.t, &xv, &yv, arm_joints);
     Ok(trained)
 }
 
@@ -400,6 +441,7 @@ fn read_cache(model_path: &Path, meta_path: &Path, key_text: &str) -> Option<Tra
         validation_samples: meta.get("validation_samples")?.as_u64()? as usize,
         lambda: meta.get("lambda")?.as_f64()?,
         cached: true,
+        validation_series: None,
     })
 }
 
