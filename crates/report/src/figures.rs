@@ -658,6 +658,28 @@ fn validation_figure(folder: &RunFolder) -> Result<Figure, String> {
     ))
 }
 
+/// `q_d` of joint `j` (from the first variant) and every variant's `q_r` (Figs 18, 20).
+fn adaptation_lines(variants: &[&Variant], j: &str) -> Result<Vec<Line>, String> {
+    let first = variants.first().ok_or("the run has no variants")?;
+    let mut lines = vec![line(
+        "desired q_d",
+        col(first, "t")?,
+        col(first, &format!("q_d.{j}"))?,
+        0,
+        false,
+    )];
+    for (k, v) in variants.iter().enumerate() {
+        lines.push(line(
+            format!("compliant q_r, {}", v.name),
+            col(v, "t")?,
+            col(v, &format!("q_r.{j}"))?,
+            VARIANT_COLORS[k % VARIANT_COLORS.len()],
+            true,
+        ));
+    }
+    Ok(lines)
+}
+
 fn plan_b(folder: &RunFolder, run: BRun) -> Vec<Planned> {
     let angles = |title: &str, wanted: BRun, elsewhere: &str| -> Result<Figure, String> {
         let found = if run == wanted {
@@ -760,23 +782,7 @@ fn plan_b(folder: &RunFolder, run: BRun) -> Vec<Planned> {
         "s0_adaptation",
         (|| {
             let (j, short) = j.clone()?;
-            let first = variants.first().ok_or("the run has no variants")?;
-            let mut lines = vec![line(
-                "desired q_d",
-                col(first, "t")?,
-                col(first, &format!("q_d.{j}"))?,
-                0,
-                false,
-            )];
-            for (k, v) in variants.iter().enumerate() {
-                lines.push(line(
-                    format!("compliant q_r, {}", v.name),
-                    col(v, "t")?,
-                    col(v, &format!("q_r.{j}"))?,
-                    VARIANT_COLORS[k % VARIANT_COLORS.len()],
-                    true,
-                ));
-            }
+            let lines = adaptation_lines(&variants, j)?;
             Ok(figure(
                 format!("Fig. 18: trajectory adaptation of joint {short}"),
                 vec![panel(format!("joint {short}"), "angle (rad)", lines)],
@@ -806,23 +812,7 @@ fn plan_b(folder: &RunFolder, run: BRun) -> Vec<Planned> {
         "s0_constraint",
         (|| {
             let (j, short) = j.clone()?;
-            let first = variants.first().ok_or("the run has no variants")?;
-            let mut lines = vec![line(
-                "desired q_d",
-                col(first, "t")?,
-                col(first, &format!("q_d.{j}"))?,
-                0,
-                false,
-            )];
-            for (k, v) in variants.iter().enumerate() {
-                lines.push(line(
-                    format!("compliant q_r, {}", v.name),
-                    col(v, "t")?,
-                    col(v, &format!("q_r.{j}"))?,
-                    VARIANT_COLORS[k % VARIANT_COLORS.len()],
-                    true,
-                ));
-            }
+            let lines = adaptation_lines(&variants, j)?;
             let mut p = panel(format!("joint {short}"), "angle (rad)", lines);
             let centre =
                 first_of(folder.scenario_value("admittance.saturation.centre")).unwrap_or(0.0);

@@ -4,33 +4,13 @@
 //! train small networks on them (`observer.training.data`), and the cache is exercised.
 //! The bars at full size are measured by the scenario itself (README).
 
+mod common;
+
+use common::{number, per_joint, scenario_path};
 use std::path::{Path, PathBuf};
 
-use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource, VariantRun};
+use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
 use serde_json::Value;
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios")
-        .join(name)
-}
-
-fn number(run: &VariantRun, key: &str) -> f64 {
-    run.metrics
-        .get(key)
-        .and_then(Value::as_f64)
-        .unwrap_or_else(|| panic!("{}: `{key}` missing", run.name))
-}
-
-fn per_joint(run: &VariantRun, key: &str) -> Vec<f64> {
-    run.metrics
-        .get(key)
-        .and_then(Value::as_array)
-        .unwrap_or_else(|| panic!("{}: `{key}` missing", run.name))
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect()
-}
 
 /// Records a data scenario, shortened to `seconds`, into `dir/free_motion.csv`.
 fn record(name: &str, seconds: f64, dir: &Path) -> PathBuf {

@@ -5,34 +5,12 @@
 //! momentum observer sees the contact, no reference leaves its saturation bound, and the
 //! free-motion file reads back through the validating loader.
 
-use std::path::{Path, PathBuf};
+mod common;
 
-use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource, VariantRun};
+use common::{number, per_joint, scenario_path};
+
+use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
 use admittance_sim::FreeMotionData;
-use serde_json::Value;
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios")
-        .join(name)
-}
-
-fn number(run: &VariantRun, key: &str) -> f64 {
-    run.metrics
-        .get(key)
-        .and_then(Value::as_f64)
-        .unwrap_or_else(|| panic!("{}: `{key}` missing", run.name))
-}
-
-fn per_joint(run: &VariantRun, key: &str) -> Vec<f64> {
-    run.metrics
-        .get(key)
-        .and_then(Value::as_array)
-        .unwrap_or_else(|| panic!("{}: `{key}` missing", run.name))
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect()
-}
 
 #[test]
 fn admittance_scenario_momentum_and_oracle() {

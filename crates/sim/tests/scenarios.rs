@@ -5,16 +5,13 @@
 //! effort limits, nodes are discarded and grown); the experiments' bars are measured on the
 //! full-length runs (`admittance run scenarios/FILE.toml --out DIR`).
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{number, per_joint, scenario_path};
+use std::path::PathBuf;
 
 use admittance_sim::scenario::{run_variant, RunOptions, ScenarioSource, VariantRun};
 use serde_json::Value;
-
-fn scenario_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios")
-        .join(name)
-}
 
 fn load(name: &str, overrides: &[&str]) -> (ScenarioSource, PathBuf) {
     let path = scenario_path(name);
@@ -23,28 +20,6 @@ fn load(name: &str, overrides: &[&str]) -> (ScenarioSource, PathBuf) {
         source.set(o).unwrap_or_else(|e| panic!("--set {o}: {e}"));
     }
     (source, path)
-}
-
-fn number(run: &VariantRun, key: &str) -> f64 {
-    run.metrics
-        .get(key)
-        .and_then(Value::as_f64)
-        .unwrap_or_else(|| panic!("{}: metric `{key}` missing or not a number", run.name))
-}
-
-fn per_joint(run: &VariantRun, key: &str) -> Vec<f64> {
-    let v = run
-        .metrics
-        .get(key)
-        .and_then(Value::as_array)
-        .unwrap_or_else(|| panic!("{}: metric `{key}` missing or not an array", run.name));
-    assert_eq!(
-        v.len(),
-        run.joints.len(),
-        "{}: `{key}` has one value per joint",
-        run.name
-    );
-    v.iter().map(|x| x.as_f64().expect("a number")).collect()
 }
 
 /// Facts every variant of every scenario must satisfy.
