@@ -209,7 +209,6 @@ mod tests {
             model.clone(),
             &MomentumObserverConfig {
                 gain: crate::JointValues::Uniform(50.0),
-                ..Default::default()
             },
         )
         .unwrap();
