@@ -132,31 +132,33 @@ fn deadzone_scenario_runs_every_variant() {
 }
 
 /// Experiment A's bars that the committed configuration meets, on a 20 s run (errors over
-/// 10-20 s; the full 40 s run gives 0.00152 vs 0.00182 rad and 0.00229 vs 0.00396 rad):
-/// the compensation lowers s0's tracking error in the paper's pair and in the wide pair by a
-/// clear margin (ratio about 0.6; the 1/3 of the issue is below what even an exact inverse
-/// reaches, see the comments in `scenarios/deadzone.toml`), and the hand error of the
-/// neural variants stays below 0.01 m.
+/// 10-20 s; the full 40 s run gives 0.00149 vs 0.00193 rad and 0.00242 vs 0.00836 rad):
+/// the compensation lowers s0's tracking error in the paper's pair, and to under a third
+/// in the wide pair (the issue's bar; 0.29 over the full 40 s, see the comments in
+/// `scenarios/deadzone.toml`). The hand error of the compensated variants stays below
+/// 0.01 m (the aim), the uncompensated ones below the paper's 0.04 m.
 #[test]
 fn deadzone_compensation_lowers_s0_error() {
     let (source, path) = load("deadzone.toml", &["duration=20.0", "evaluation_start=10.0"]);
     let options = RunOptions::default();
-    let s0 = |name: &str| {
+    let s0 = |name: &str, hand_error_bound: f64| {
         let run = run_variant(&source, &path, Some(name), &options)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         check_common(&run);
         let ee = number(&run, "ee_error_max");
-        assert!(ee < 0.01, "{name}: hand error {ee} m");
+        assert!(ee < hand_error_bound, "{name}: hand error {ee} m");
         per_joint(&run, "tracking_rmse")[0]
     };
-    let (comp, uncomp) = (s0("nn_compensated"), s0("nn_uncompensated"));
+    let comp = s0("nn_compensated", 0.01);
+    let uncomp = s0("nn_uncompensated", 0.04);
     assert!(
         comp < 0.95 * uncomp,
         "paper's deadzone: s0 rmse {comp:.3e} compensated vs {uncomp:.3e}"
     );
-    let (comp, uncomp) = (s0("nn_compensated_wide"), s0("nn_uncompensated_wide"));
+    let comp = s0("nn_compensated_wide", 0.01);
+    let uncomp = s0("nn_uncompensated_wide", 0.04);
     assert!(
-        comp < 0.75 * uncomp,
+        comp < uncomp / 3.0,
         "+-5 N m deadzone: s0 rmse {comp:.3e} compensated vs {uncomp:.3e}"
     );
 }
