@@ -44,15 +44,20 @@
 //!   1e-10 .. 1e-2); one Gram accumulation, one Cholesky solve per candidate, one blocked
 //!   pass over the validation set predicting with all candidates at once; the candidate
 //!   with the smallest mean (over outputs) validation NRMSE wins.
-//! * **Gram**: row blocks of `block_rows` (default 2048) rows; each worker thread forms the
-//!   block's pattern (the Gaussian distances by one GEMM, `||x||^2 + ||u||^2 - 2 X U^T`,
-//!   then a vectorised exp accurate to 1 ulp) and adds it to a private Gram by a symmetric
-//!   rank-k update of the lower triangle (faer's triangular matmul); the private Grams are
-//!   summed ([`GramStrategy::PerThread`], default; [`GramStrategy::SharedGemm`] instead
-//!   parallelises inside one GEMM; slower in every measurement here). The rows are split
-//!   statically between the threads, so a fit is bitwise reproducible for a given thread
-//!   count. Memory: one P x P Gram and one P x block pattern per thread (about 26 MB each
-//!   at P = 1043), never the N x P pattern matrix.
+//! * **Gram**: row blocks of `block_rows` rows (default 2048; at most 256 on the packed
+//!   path below, so that a block stays in cache); each worker thread forms the block's
+//!   pattern (the Gaussian distances by one product, `||x||^2 + ||u||^2 - 2 X U^T`, then
+//!   a vectorised exp accurate to 1 ulp, flushed to 0 below 1.7e-154) and adds it to a
+//!   private Gram by a symmetric rank-k update of the lower triangle, with the targets
+//!   packed as extra rows so that the same update yields `A^T Y`. With AVX2 + FMA the
+//!   products run on packed slabs with a register-tiled 8 x 6 kernel (`kernels/syrk.rs`,
+//!   about 90 % of the FMA peak on one core); otherwise on faer's triangular matmul. The
+//!   private Grams are summed ([`GramStrategy::PerThread`], default;
+//!   [`GramStrategy::SharedGemm`] instead parallelises inside one faer GEMM; slower in
+//!   every measurement here). The rows are split statically between the threads, so a fit
+//!   is bitwise reproducible for a given thread count. Memory: one (P + d_out)^2 Gram and
+//!   one P x block pattern per thread (about 9 MB and 2 MB at P = 1043), never the N x P
+//!   pattern matrix.
 
 mod centres;
 mod config;

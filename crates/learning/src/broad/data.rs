@@ -45,14 +45,14 @@ impl<'a> Dataset<'a> {
                 got: 0,
             });
         }
-        if inputs.len() % d_in != 0 {
+        if !inputs.len().is_multiple_of(d_in) {
             return Err(BroadError::Dimension {
                 what: "input array length (multiple of d_in)",
                 expected: (inputs.len() / d_in + 1) * d_in,
                 got: inputs.len(),
             });
         }
-        if targets.len() % d_out != 0 {
+        if !targets.len().is_multiple_of(d_out) {
             return Err(BroadError::Dimension {
                 what: "target array length (multiple of d_out)",
                 expected: (targets.len() / d_out + 1) * d_out,

@@ -3,20 +3,29 @@
 //! one pattern row per column) and hands it to a consumer: the Gram accumulation
 //! `G += A_b^T A_b`, `A^T Y += A_b^T Y_b` (METHOD.md section 5, the normal equations of
 //! the ridge solution), the cross terms of a node growth, or validation predictions.
+//!
+//! The products that dominate a fit, the Gram (with A^T Y) and the growth cross terms,
+//! run on packed slabs with a register-tiled AVX2 + FMA kernel (`kernels/syrk.rs`) when
+//! the CPU has it and each block is handled by one thread; otherwise on faer's matmul.
 
 use super::config::GramStrategy;
 use super::data::Dataset;
-use super::features::FeatureMap;
+use super::features::{BlockScratch, FeatureMap};
+use super::kernels::syrk::{self, Store};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// One pattern block handed to a consumer.
 pub(crate) struct Block<'a> {
     /// Pattern, P x b column-major (A_b^T).
     pub at: MatRef<'a, f64>,
+    /// The same pattern as a slice: sample s is `at_cm[s * P..(s + 1) * P]`.
+    pub at_cm: &'a [f64],
     /// Targets of the block, b x d_out (row-major view).
     pub y: MatRef<'a, f64>,
+    /// The same targets as a slice: sample s is `y_rm[s * d_out..(s + 1) * d_out]`.
+    pub y_rm: &'a [f64],
 }
 
 /// Runs `consume` on every block of `data`, with `threads` workers.
@@ -43,14 +52,22 @@ pub(crate) fn for_each_block<S: Send>(
     let run_range = |start: usize, end: usize, state: &mut S| {
         let cap = block_rows.min(end - start);
         let mut at = vec![0.0; p * cap];
-        let mut xn = vec![0.0; cap];
+        let mut scratch = BlockScratch::default();
         let mut r = start;
         while r < end {
             let b = block_rows.min(end - r);
-            fm.fill_block(data.input_rows(r, b), &mut at[..p * b], &mut xn, Par::Seq);
+            fm.fill_block(
+                data.input_rows(r, b),
+                &mut at[..p * b],
+                &mut scratch,
+                Par::Seq,
+            );
+            let y_rm = data.target_rows(r, b);
             let block = Block {
                 at: MatRef::from_column_major_slice(&at[..p * b], p, b),
-                y: MatRef::from_row_major_slice(data.target_rows(r, b), b, d_out),
+                at_cm: &at[..p * b],
+                y: MatRef::from_row_major_slice(y_rm, b, d_out),
+                y_rm,
             };
             consume(state, block, Par::Seq);
             r += b;
@@ -93,7 +110,6 @@ pub(crate) fn for_each_block<S: Send>(
         GramStrategy::SharedGemm => {
             let mut state = init();
             let mut at = vec![0.0; p * block_rows];
-            let mut xn = vec![0.0; block_rows];
             let par = Par::rayon(threads);
             let mut r = 0;
             while r < n {
@@ -101,22 +117,24 @@ pub(crate) fn for_each_block<S: Send>(
                 let per = b.div_ceil(threads);
                 std::thread::scope(|scope| {
                     let mut at_rest = &mut at[..p * b];
-                    let mut xn_rest = &mut xn[..b];
                     let mut s0 = 0;
                     while s0 < b {
                         let bb = per.min(b - s0);
                         let (at_part, at_tail) = std::mem::take(&mut at_rest).split_at_mut(p * bb);
-                        let (xn_part, xn_tail) = std::mem::take(&mut xn_rest).split_at_mut(bb);
                         at_rest = at_tail;
-                        xn_rest = xn_tail;
                         let rows = data.input_rows(r + s0, bb);
-                        scope.spawn(move || fm.fill_block(rows, at_part, xn_part, Par::Seq));
+                        scope.spawn(move || {
+                            fm.fill_block(rows, at_part, &mut BlockScratch::default(), Par::Seq)
+                        });
                         s0 += bb;
                     }
                 });
+                let y_rm = data.target_rows(r, b);
                 let block = Block {
                     at: MatRef::from_column_major_slice(&at[..p * b], p, b),
-                    y: MatRef::from_row_major_slice(data.target_rows(r, b), b, d_out),
+                    at_cm: &at[..p * b],
+                    y: MatRef::from_row_major_slice(y_rm, b, d_out),
+                    y_rm,
                 };
                 consume(&mut state, block, par);
                 r += b;
@@ -148,16 +166,6 @@ impl GramAcc {
             y_sq: vec![0.0; d_out],
         }
     }
-    fn add(&mut self, other: &GramAcc) {
-        self.g += &other.g;
-        self.aty += &other.aty;
-        for (a, b) in self.y_sum.iter_mut().zip(&other.y_sum) {
-            *a += b;
-        }
-        for (a, b) in self.y_sq.iter_mut().zip(&other.y_sq) {
-            *a += b;
-        }
-    }
 }
 
 fn add_y_stats(y: MatRef<'_, f64>, y_sum: &mut [f64], y_sq: &mut [f64]) {
@@ -170,7 +178,36 @@ fn add_y_stats(y: MatRef<'_, f64>, y_sum: &mut [f64], y_sq: &mut [f64]) {
     }
 }
 
-/// G = A^T A (lower triangle, symmetric rank-k updates), A^T Y and the target sums.
+/// Whether the blocks of a pass go through the packed SIMD kernel: the CPU has AVX2 +
+/// FMA and each block is consumed by one thread (the `SharedGemm` strategy parallelises
+/// inside faer's matmul instead). Such passes use blocks of at most `syrk::KC` rows, so
+/// that a block's pattern (about 2 MB at P = 1043) stays in cache between its formation,
+/// its packing and the products, and every block is consumed with `Par::Seq`. `allow`
+/// false forces faer (tests).
+fn simd_rows(
+    block_rows: usize,
+    threads: usize,
+    strategy: GramStrategy,
+    allow: bool,
+) -> Option<usize> {
+    let one_thread_per_block = threads <= 1 || strategy == GramStrategy::PerThread;
+    (allow && syrk::simd_available() && one_thread_per_block).then(|| block_rows.clamp(1, syrk::KC))
+}
+
+/// One worker's share of [`accumulate_gram`].
+struct GramPart {
+    /// Column-major, lower triangle. Packed path: the Gram of `[A | Y]`, (P + d_out)
+    /// square, whose last d_out rows hold `Y^T A`; faer path: G alone, P x P.
+    g: Vec<f64>,
+    /// A^T Y (faer path).
+    aty: Mat<f64>,
+    y_sum: Vec<f64>,
+    y_sq: Vec<f64>,
+    slab: Option<syrk::Slab>,
+}
+
+/// G = A^T A (lower triangle, symmetric rank-k updates), A^T Y and the target sums:
+/// the normal equations of METHOD.md section 5, accumulated block by block.
 pub(crate) fn accumulate_gram(
     fm: &FeatureMap,
     data: &Dataset<'_>,
@@ -178,44 +215,103 @@ pub(crate) fn accumulate_gram(
     threads: usize,
     strategy: GramStrategy,
 ) -> GramAcc {
+    gram_pass(fm, data, block_rows, threads, strategy, true)
+}
+
+fn gram_pass(
+    fm: &FeatureMap,
+    data: &Dataset<'_>,
+    block_rows: usize,
+    threads: usize,
+    strategy: GramStrategy,
+    allow_simd: bool,
+) -> GramAcc {
     let p = fm.width();
     let d_out = data.d_out();
+    let simd = simd_rows(block_rows, threads, strategy, allow_simd);
+    // Packed path: Y rides along as d_out extra rows, so that one symmetric product
+    // gives A^T A and A^T Y (its last rows) at the kernel's speed.
+    let n = if simd.is_some() { p + d_out } else { p };
     let parts = for_each_block(
         fm,
         data,
-        block_rows,
+        simd.unwrap_or(block_rows),
         threads,
         strategy,
-        || GramAcc::zeros(p, d_out),
+        || GramPart {
+            g: vec![0.0; n * n],
+            aty: Mat::zeros(p, d_out),
+            y_sum: vec![0.0; d_out],
+            y_sq: vec![0.0; d_out],
+            slab: None,
+        },
         |acc, block, par| {
-            tri_matmul(
-                acc.g.as_mut(),
-                BlockStructure::TriangularLower,
-                Accum::Add,
-                block.at,
-                BlockStructure::Rectangular,
-                block.at.transpose(),
-                BlockStructure::Rectangular,
-                1.0,
-                par,
-            );
-            matmul(acc.aty.as_mut(), Accum::Add, block.at, block.y, 1.0, par);
+            let b = block.at.ncols();
+            if simd.is_some() {
+                let slab = acc.slab.get_or_insert_with(|| syrk::Slab::new(n, syrk::KC));
+                let mut s0 = 0;
+                while s0 < b {
+                    let k = syrk::KC.min(b - s0);
+                    slab.pack_with_targets(block.at_cm, p, s0, k, block.y_rm, d_out);
+                    syrk::gemm_nt(&mut acc.g, n, slab, slab, Store::AddLower);
+                    s0 += k;
+                }
+            } else {
+                tri_matmul(
+                    MatMut::from_column_major_slice_mut(&mut acc.g, n, n)
+                        .subrows_mut(0, p)
+                        .subcols_mut(0, p),
+                    BlockStructure::TriangularLower,
+                    Accum::Add,
+                    block.at,
+                    BlockStructure::Rectangular,
+                    block.at.transpose(),
+                    BlockStructure::Rectangular,
+                    1.0,
+                    par,
+                );
+                matmul(acc.aty.as_mut(), Accum::Add, block.at, block.y, 1.0, par);
+            }
             add_y_stats(block.y, &mut acc.y_sum, &mut acc.y_sq);
         },
     );
-    let mut it = parts.into_iter();
-    let mut total = it.next().unwrap_or_else(|| GramAcc::zeros(p, d_out));
-    for part in it {
-        total.add(&part);
+    // Summed into the first worker's share (one Gram-sized buffer less at the peak).
+    let mut parts = parts.into_iter();
+    let Some(mut sum) = parts.next() else {
+        return GramAcc::zeros(p, d_out);
+    };
+    for part in parts {
+        let pairs = [
+            (&mut sum.g, &part.g),
+            (&mut sum.y_sum, &part.y_sum),
+            (&mut sum.y_sq, &part.y_sq),
+        ];
+        for (total, add) in pairs {
+            for (a, b) in total.iter_mut().zip(add) {
+                *a += b;
+            }
+        }
+        sum.aty += &part.aty;
     }
-    total
+    let g = MatRef::from_column_major_slice(&sum.g, n, n);
+    GramAcc {
+        g: g.submatrix(0, 0, p, p).to_owned(),
+        aty: if n > p {
+            g.submatrix(p, 0, d_out, p).transpose().to_owned()
+        } else {
+            sum.aty
+        },
+        y_sum: sum.y_sum,
+        y_sq: sum.y_sq,
+    }
 }
 
 /// Cross terms for `k` new nodes appended at the end of `fm` (pattern width P' = P + k):
 /// the last k rows of the grown Gram, `A_new^T [A_old | A_new]` (k x P'), and
 /// `A_new^T Y` (k x d_out). The old features are recomputed per block (the pattern matrix
 /// is not stored) but only the k new rows of the Gram are multiplied: 2 N P' k flops
-/// instead of N P'^2 for a full retrain.
+/// instead of N P'^2 for a full retrain. Accumulated transposed, `[A | Y]^T A_new`
+/// ((P' + d_out) x k, Y as extra rows on the packed path), the packed kernel's layout.
 pub(crate) fn accumulate_new_rows(
     fm: &FeatureMap,
     data: &Dataset<'_>,
@@ -224,36 +320,68 @@ pub(crate) fn accumulate_new_rows(
     threads: usize,
     strategy: GramStrategy,
 ) -> (Mat<f64>, Mat<f64>) {
+    new_rows_pass(fm, data, k, block_rows, threads, strategy, true)
+}
+
+fn new_rows_pass(
+    fm: &FeatureMap,
+    data: &Dataset<'_>,
+    k: usize,
+    block_rows: usize,
+    threads: usize,
+    strategy: GramStrategy,
+    allow_simd: bool,
+) -> (Mat<f64>, Mat<f64>) {
     let p = fm.width();
     let p_old = p - k;
     let d_out = data.d_out();
+    let simd = simd_rows(block_rows, threads, strategy, allow_simd);
+    let n = if simd.is_some() { p + d_out } else { p };
     let parts = for_each_block(
         fm,
         data,
-        block_rows,
+        simd.unwrap_or(block_rows),
         threads,
         strategy,
-        || (Mat::<f64>::zeros(k, p), Mat::<f64>::zeros(k, d_out)),
-        |(rows, aty), block, par| {
+        || (vec![0.0; n * k], Mat::<f64>::zeros(k, d_out), None),
+        |(cross, aty, slabs), block, par| {
+            let b = block.at.ncols();
             let new_t = block.at.subrows(p_old, k);
-            matmul(
-                rows.as_mut(),
-                Accum::Add,
-                new_t,
-                block.at.transpose(),
-                1.0,
-                par,
-            );
-            matmul(aty.as_mut(), Accum::Add, new_t, block.y, 1.0, par);
+            if simd.is_some() {
+                let (all, new) = slabs.get_or_insert_with(|| {
+                    (syrk::Slab::new(n, syrk::KC), syrk::Slab::new(k, syrk::KC))
+                });
+                let mut s0 = 0;
+                while s0 < b {
+                    let kc = syrk::KC.min(b - s0);
+                    all.pack_with_targets(block.at_cm, p, s0, kc, block.y_rm, d_out);
+                    new.pack(block.at_cm, p, p_old, s0, kc);
+                    syrk::gemm_nt(cross, n, all, new, Store::Add);
+                    s0 += kc;
+                }
+            } else {
+                matmul(
+                    MatMut::from_column_major_slice_mut(cross, n, k),
+                    Accum::Add,
+                    block.at,
+                    new_t.transpose(),
+                    1.0,
+                    par,
+                );
+                matmul(aty.as_mut(), Accum::Add, new_t, block.y, 1.0, par);
+            }
         },
     );
-    let mut it = parts.into_iter();
-    let (mut rows, mut aty) = it
-        .next()
-        .unwrap_or_else(|| (Mat::zeros(k, p), Mat::zeros(k, d_out)));
-    for (r, a) in it {
-        rows += &r;
-        aty += &a;
+    let mut rows = Mat::<f64>::zeros(k, p);
+    let mut aty = Mat::<f64>::zeros(k, d_out);
+    for (cross, a, _) in &parts {
+        let c = MatRef::from_column_major_slice(cross, n, k);
+        rows += c.subrows(0, p).transpose();
+        if n > p {
+            aty += c.subrows(p, d_out).transpose();
+        } else {
+            aty += a;
+        }
     }
     (rows, aty)
 }
@@ -310,4 +438,143 @@ pub(crate) fn prediction_sse(
         }
     }
     total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::broad::config::FrictionFeatures;
+    use crate::broad::data::Standardiser;
+    use crate::broad::features::NodeSet;
+
+    /// Deterministic pseudo-random values in [-1, 1).
+    fn values(n: usize, seed: u64) -> Vec<f64> {
+        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        (0..n)
+            .map(|_| {
+                x = x
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+            })
+            .collect()
+    }
+
+    /// A feature map with `l` nodes on 3 inputs (one with friction features) and the
+    /// pattern matrix of `data` formed in one block, column-major P x N.
+    fn setup(data: &Dataset<'_>, l: usize, seed: u64) -> (FeatureMap, Vec<f64>) {
+        let nodes = NodeSet {
+            dim: 3,
+            centres: values(3 * l, seed),
+            widths: values(l, seed + 1).iter().map(|v| 0.8 + 0.5 * v).collect(),
+        };
+        let friction = FrictionFeatures {
+            columns: vec![1],
+            scales: vec![0.1, 0.5],
+        };
+        let fm = FeatureMap::new(Standardiser::from_data(data), friction, nodes);
+        let (n, p) = (data.n_samples(), fm.width());
+        let mut at = vec![0.0; p * n];
+        fm.fill_block(
+            data.inputs(),
+            &mut at,
+            &mut BlockScratch::default(),
+            Par::Seq,
+        );
+        (fm, at)
+    }
+
+    /// `|got - expected| <= 1e-12 * scale` entrywise.
+    fn assert_close(got: MatRef<'_, f64>, expected: &Mat<f64>, scale: &Mat<f64>, what: &str) {
+        for j in 0..got.ncols() {
+            for i in 0..got.nrows() {
+                let err = (got[(i, j)] - expected[(i, j)]).abs();
+                assert!(
+                    err <= 1e-12 * scale[(i, j)] + 1e-300,
+                    "{what}: ({i}, {j}) = {} vs {} (error {err:e})",
+                    got[(i, j)],
+                    expected[(i, j)]
+                );
+            }
+        }
+    }
+
+    /// The packed kernel and the faer path give the naive `A^T A` (lower triangle),
+    /// `A^T Y` and the growth cross terms, for block sizes that do not divide N and for
+    /// 1 and 2 threads.
+    #[test]
+    fn packed_and_faer_passes_match_naive_products() {
+        let (n, d_out, l, k_new) = (611, 2, 45, 7);
+        let x = values(n * 3, 11);
+        let y = values(n * d_out, 12);
+        let data = Dataset::new(&x, &y, 3, d_out).unwrap();
+        let (fm, at) = setup(&data, l, 13);
+        let p = fm.width();
+        let a = |s: usize, i: usize| at[s * p + i];
+        let (mut g, mut g_scale) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, p));
+        for j in 0..p {
+            for i in j..p {
+                for s in 0..n {
+                    g[(i, j)] += a(s, i) * a(s, j);
+                    g_scale[(i, j)] += (a(s, i) * a(s, j)).abs();
+                }
+            }
+        }
+        let (mut aty, mut aty_scale) = (Mat::<f64>::zeros(p, d_out), Mat::<f64>::zeros(p, d_out));
+        for o in 0..d_out {
+            for i in 0..p {
+                for s in 0..n {
+                    aty[(i, o)] += a(s, i) * y[s * d_out + o];
+                    aty_scale[(i, o)] += (a(s, i) * y[s * d_out + o]).abs();
+                }
+            }
+        }
+        // Row p - k + r of the symmetric G, from its lower triangle.
+        let sym = |m: &Mat<f64>, r: usize, i: usize| {
+            let row = p - k_new + r;
+            m[(row.max(i), row.min(i))]
+        };
+        let rows = Mat::<f64>::from_fn(k_new, p, |r, i| sym(&g, r, i));
+        let rows_scale = Mat::<f64>::from_fn(k_new, p, |r, i| sym(&g_scale, r, i));
+        let rows_aty = aty.as_ref().subrows(p - k_new, k_new).to_owned();
+        let rows_aty_scale = aty_scale.as_ref().subrows(p - k_new, k_new).to_owned();
+        for allow_simd in [true, false] {
+            for (block, threads) in [(1, 1), (7, 1), (256, 1), (300, 2), (2048, 2)] {
+                let what = format!("simd {allow_simd} block {block} threads {threads}");
+                let acc = gram_pass(
+                    &fm,
+                    &data,
+                    block,
+                    threads,
+                    GramStrategy::PerThread,
+                    allow_simd,
+                );
+                let lower =
+                    Mat::<f64>::from_fn(p, p, |i, j| if i >= j { acc.g[(i, j)] } else { 0.0 });
+                assert_close(lower.as_ref(), &g, &g_scale, &format!("{what} G"));
+                assert_close(acc.aty.as_ref(), &aty, &aty_scale, &format!("{what} A^T Y"));
+                let (r, ra) = new_rows_pass(
+                    &fm,
+                    &data,
+                    k_new,
+                    block,
+                    threads,
+                    GramStrategy::PerThread,
+                    allow_simd,
+                );
+                assert_close(
+                    r.as_ref(),
+                    &rows,
+                    &rows_scale,
+                    &format!("{what} cross terms"),
+                );
+                assert_close(
+                    ra.as_ref(),
+                    &rows_aty,
+                    &rows_aty_scale,
+                    &format!("{what} new A^T Y"),
+                );
+            }
+        }
+    }
 }

@@ -580,7 +580,7 @@ impl BroadModel {
     /// Predictions for many rows: `inputs` row-major (N x d_in), `out` row-major (N x d_out).
     pub fn predict_batch(&self, inputs: &[f64], out: &mut [f64]) -> Result<(), BroadError> {
         let d = self.d_in();
-        if inputs.len() % d != 0 {
+        if !inputs.len().is_multiple_of(d) {
             return Err(BroadError::Dimension {
                 what: "input array length (multiple of d_in)",
                 expected: (inputs.len() / d + 1) * d,

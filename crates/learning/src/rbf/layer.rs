@@ -248,7 +248,7 @@ impl GaussianRbfLayer {
         }
         options.validate()?;
         let inv = inverse_width_sq(width).ok_or(RbfConfigError::InvalidWidth(width))?;
-        if centres.len() % dim != 0 {
+        if !centres.len().is_multiple_of(dim) {
             return Err(RbfConfigError::InvalidCentre {
                 index: centres.len() / dim,
                 got: centres.len() % dim,
