@@ -4,7 +4,11 @@
 # checks that both give the same weights, times a growth by 100 nodes against a full
 # retrain, and reports peak memory.
 #
-#   scripts/bench/broad_vs_numpy.sh [--rows N] [--nodes L] [--threads T]
+#   scripts/bench/broad_vs_numpy.sh [--rows N] [--nodes L] [--threads T] [--rounds R]
+#
+# The ratio to numpy comes from R rounds (default 3) that each run one Rust fit and one
+# numpy fit back to back, so that both see the same load on this shared machine; the
+# script prints every round's ratio and their median.
 #
 # Needs python3 (a scratch venv .venv-bench with numpy and scipy is made if missing).
 # Scratch files go to $BROAD_BENCH_DIR (default: a temporary directory, removed at exit).
@@ -14,11 +18,13 @@ cd "$(dirname "$0")/../.."
 ROWS=450000
 NODES=1000
 THREADS=0
+ROUNDS=3
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --rows) ROWS="$2"; shift 2 ;;
     --nodes) NODES="$2"; shift 2 ;;
     --threads) THREADS="$2"; shift 2 ;;
+    --rounds) ROUNDS="$2"; shift 2 ;;
     *) echo "unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -50,7 +56,14 @@ for mode in matmul syrk; do
     > "$DIR/numpy_$mode.json" 2> "$DIR/numpy_$mode.time"
 done
 
-"$VENV/bin/python" - "$DIR" <<'EOF'
+echo "== $ROUNDS alternating rounds: one Rust fit, one numpy (A.T @ A) fit ==" >&2
+for ((r = 1; r <= ROUNDS; r++)); do
+  "$BIN" --threads "$THREADS" --fixed-from "$DIR" > "$DIR/round_${r}_rust.json"
+  "$VENV/bin/python" scripts/bench/broad_numpy.py "$DIR" --gram matmul --repeat 1 \
+    > "$DIR/round_${r}_numpy.json"
+done
+
+ROUNDS="$ROUNDS" "$VENV/bin/python" - "$DIR" <<'EOF'
 import json, re, sys, os
 d = sys.argv[1]
 def maxrss(f):
@@ -69,6 +82,18 @@ for mode in ("matmul", "syrk"):
     n = json.load(open(os.path.join(d, f"numpy_{mode}.json")))
     print(f"numpy ({mode}) same fit: {n['total_s']:.2f} s (fastest of {[round(v, 2) for v in n['runs_s']]})   Rust/numpy = {rust / n['total_s']:.3f}   "
           f"CPU {n['cpu_s']:.2f} s (Rust/numpy {r['fixed_nodes_fit_cpu_s'] / n['cpu_s']:.3f})   weights rel diff {n['weights_rel_diff_vs_rust']:.2e}   peak RSS {maxrss(os.path.join(d, f'numpy_{mode}.time')):.0f} MB")
+rounds = []
+for k in range(1, int(os.environ.get("ROUNDS", "0")) + 1):
+    a = json.load(open(os.path.join(d, f"round_{k}_rust.json")))
+    b = json.load(open(os.path.join(d, f"round_{k}_numpy.json")))
+    rounds.append((a["fixed_nodes_fit_s"], b["total_s"], a["weights_rel_diff"]))
+if rounds:
+    ratios = sorted(x / y for x, y, _ in rounds)
+    med = ratios[len(ratios) // 2] if len(ratios) % 2 else 0.5 * (ratios[len(ratios) // 2 - 1] + ratios[len(ratios) // 2])
+    print("alternating rounds (Rust s, numpy A.T @ A s, ratio): "
+          + ", ".join(f"({x:.2f}, {y:.2f}, {x / y:.3f})" for x, y, _ in rounds))
+    print(f"median Rust/numpy over {len(rounds)} alternating rounds: {med:.3f} "
+          f"(Rust weights equal to the first run's to {max(w for _, _, w in rounds):.1e})")
 g = r.get("growth")
 if g:
     print(f"growth by {g['nodes_added']} nodes: {g['grow_s']:.2f} s (cross terms {g['grow_cross_terms_s']:.2f}), "

@@ -8,13 +8,18 @@
 //! cargo run --release -p admittance-learning --example broad_train_timing -- \
 //!     [--rows 450000] [--nodes 1000] [--grow 100] [--threads 0] [--block 2048]
 //!     [--strategy per-thread|shared] [--out DIR] [--skip-growth] [--repeat 2]
+//!     [--fixed-from DIR]
 //! ```
+//!
+//! `--fixed-from DIR` runs only one fixed-node fit on the nodes and lambda that a run with
+//! `--out DIR` wrote (the benchmark script alternates it with numpy's fit).
 //!
 //! Timings on a shared machine fluctuate: the fixed-node fit, the growth and the retrain
 //! are repeated `--repeat` times (growth and retrain alternating) and the minimum is kept.
 
 use admittance_learning::broad::{
     exp_nonpositive_slice, fit, fit_with_nodes, BroadConfig, Dataset, GramStrategy, GrowthSpec,
+    NodeSet,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -81,6 +86,44 @@ fn write_f64(path: &std::path::Path, v: &[f64]) {
     for x in v {
         f.write_all(&x.to_le_bytes()).expect("write");
     }
+}
+
+fn read_f64(path: &std::path::Path) -> Vec<f64> {
+    let bytes = std::fs::read(path).expect("read");
+    bytes
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect()
+}
+
+/// `--fixed-from DIR`: one fixed-node fit (features + Gram + solve) on the nodes and
+/// lambda that an earlier run wrote to DIR, the same data regenerated; prints its time.
+/// The benchmark script alternates this with numpy's fit, round by round.
+fn fixed_fit_from(dir: &str, config: &BroadConfig) {
+    let dir = std::path::Path::new(dir);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("meta.json")).expect("meta"))
+            .expect("meta json");
+    let rows = meta["rows"].as_u64().expect("rows") as usize;
+    let nodes = NodeSet {
+        dim: 3 * J,
+        centres: read_f64(&dir.join("centres.f64")),
+        widths: read_f64(&dir.join("widths.f64")),
+    };
+    let mut fixed = config.clone();
+    fixed.nodes = nodes.len();
+    fixed.lambda_grid = vec![meta["lambda_rel"].as_f64().expect("lambda_rel")];
+    let (x, y) = make_data(rows, 0, 1);
+    let train = Dataset::new(&x, &y, 3 * J, J).expect("train data");
+    let c0 = cpu_s();
+    let t = Instant::now();
+    let (model, _) = fit_with_nodes(&train, None, &fixed, &nodes).expect("fit fixed");
+    let fit_s = t.elapsed().as_secs_f64();
+    let cpu = cpu_s() - c0;
+    let same = rel_diff(model.weights(), &read_f64(&dir.join("weights_rust.f64")));
+    let out =
+        serde_json::json!({"fixed_nodes_fit_s": fit_s, "cpu_s": cpu, "weights_rel_diff": same});
+    println!("{out}");
 }
 
 fn peak_rss_mb() -> f64 {
@@ -155,6 +198,16 @@ fn main() {
         .unwrap_or(2)
         .max(1);
 
+    let mut config = BroadConfig::for_arm(J);
+    config.nodes = nodes;
+    config.threads = threads;
+    config.block_rows = block;
+    config.gram_strategy = strategy;
+    if let Some(dir) = get("--fixed-from") {
+        fixed_fit_from(&dir, &config);
+        return;
+    }
+
     // Fast exp versus libm exp, 10 M values.
     let vals: Vec<f64> = (0..10_000_000)
         .map(|i| -((i % 100_000) as f64) * 1e-4)
@@ -179,12 +232,6 @@ fn main() {
     let gen_s = t.elapsed().as_secs_f64();
     let train = Dataset::new(&x, &y, 3 * J, J).expect("train data");
     let val = Dataset::new(&xv, &yv, 3 * J, J).expect("validation data");
-
-    let mut config = BroadConfig::for_arm(J);
-    config.nodes = nodes;
-    config.threads = threads;
-    config.block_rows = block;
-    config.gram_strategy = strategy;
 
     // 1. Full fit: centres, Gram, lambda scan on the validation set.
     let (model, report) = fit(&train, Some(&val), &config).expect("fit");
@@ -283,7 +330,7 @@ fn main() {
             "rows": rows, "d_in": 3 * J, "d_out": J, "nodes": model.n_nodes(),
             "pattern_width": model.pattern_width(), "bias_index": model.bias_index(),
             "friction_columns": model.friction().columns, "friction_scales": model.friction().scales,
-            "lambda": model2.lambda(), "rust_fixed_fit_s": fixed_s,
+            "lambda": model2.lambda(), "lambda_rel": model.lambda_rel(), "rust_fixed_fit_s": fixed_s,
         });
         std::fs::write(
             dir.join("meta.json"),

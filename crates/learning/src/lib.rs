@@ -7,4 +7,5 @@
 //!   (METHOD.md section 5): ridge regression on free-motion data, incremental growth.
 
 pub mod broad;
+mod exp;
 pub mod rbf;
