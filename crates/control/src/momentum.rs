@@ -22,7 +22,7 @@
 
 use std::sync::Arc;
 
-use admittance_dynamics::{coriolis_matrix, crba, gravity_torque, Data, Model};
+use admittance_dynamics::{momentum_observer_terms, Data, Model};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{Bound, JointValues};
@@ -100,31 +100,15 @@ impl MomentumObserver {
         &self.model
     }
 
-    /// Computes `p = M q'` and `C^T q' - G` into the buffers.
+    /// Computes `p = M q'` and `C^T q' - G` into the buffers, in one O(n) pass over the
+    /// chain ([`momentum_observer_terms`]; neither `M` nor `C` is formed).
     fn evaluate(&mut self, q: &[f64], qdot: &[f64]) -> Result<(), Fault> {
-        let n = self.gain.len();
-        let m = crba(&self.model, &mut self.data, q)
-            .map_err(|_| Fault::Internal("momentum observer: crba"))?;
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += m[(i, j)] * qdot[j];
-            }
-            self.p[i] = s;
-        }
-        let c = coriolis_matrix(&self.model, &mut self.data, q, qdot)
-            .map_err(|_| Fault::Internal("momentum observer: coriolis"))?;
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += c[(j, i)] * qdot[j];
-            }
-            self.model_terms[i] = s;
-        }
-        let g = gravity_torque(&self.model, &mut self.data, q)
-            .map_err(|_| Fault::Internal("momentum observer: gravity"))?;
-        for i in 0..n {
-            self.model_terms[i] -= g[i];
+        momentum_observer_terms(&self.model, &mut self.data, q, qdot)
+            .map_err(|_| Fault::Internal("momentum observer: model terms"))?;
+        let d = &self.data;
+        for (i, (p, terms)) in self.p.iter_mut().zip(&mut self.model_terms).enumerate() {
+            *p = d.momentum[i];
+            *terms = d.coriolis_transpose_v[i] - d.gravity_torque[i];
         }
         Ok(())
     }
@@ -226,7 +210,7 @@ impl Observer for MomentumObserver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use admittance_dynamics::aba;
+    use admittance_dynamics::{aba, gravity_torque};
 
     /// Per-joint scales that keep the light wrist joints slow.
     const EXCITATION: [f64; 7] = [1.5, 1.5, 0.5, 0.5, 0.05, 0.05, 0.005];

@@ -39,6 +39,18 @@ fn algorithms(c: &mut Criterion) {
     group.bench_function("coriolis", |b| {
         b.iter(|| black_box(coriolis_matrix(&model, &mut data, black_box(&q), &v).is_ok()))
     });
+    // The momentum observer's terms: fused O(n) pass against the three calls it replaces.
+    group.bench_function("momentum_observer_terms", |b| {
+        b.iter(|| black_box(momentum_observer_terms(&model, &mut data, black_box(&q), &v).is_ok()))
+    });
+    group.bench_function("crba_coriolis_gravity", |b| {
+        b.iter(|| {
+            let q = black_box(&q);
+            black_box(crba(&model, &mut data, q).is_ok());
+            black_box(coriolis_matrix(&model, &mut data, q, &v).is_ok());
+            black_box(gravity_torque(&model, &mut data, q).is_ok())
+        })
+    });
     group.bench_function("gravity", |b| {
         b.iter(|| black_box(gravity_torque(&model, &mut data, black_box(&q)).is_ok()))
     });

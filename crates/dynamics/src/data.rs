@@ -38,6 +38,10 @@ pub struct Data {
     pub nonlinear_effects: DVector<f64>,
     /// Coriolis matrix C(q, qdot) (Christoffel form, `Mdot - 2C` skew-symmetric).
     pub coriolis: DMatrix<f64>,
+    /// Generalised momentum M(q) qdot ([`crate::momentum_observer_terms`]).
+    pub momentum: DVector<f64>,
+    /// C(q, qdot)^T qdot ([`crate::momentum_observer_terms`]).
+    pub coriolis_transpose_v: DVector<f64>,
     /// Joint accelerations (ABA).
     pub qddot: DVector<f64>,
     /// Geometric Jacobian of a frame: linear rows first, base axes, at the frame origin.
@@ -76,6 +80,8 @@ impl Data {
             gravity_torque: DVector::zeros(n),
             nonlinear_effects: DVector::zeros(n),
             coriolis: DMatrix::zeros(n, n),
+            momentum: DVector::zeros(n),
+            coriolis_transpose_v: DVector::zeros(n),
             qddot: DVector::zeros(n),
             jacobian: Matrix6xX::zeros(n),
             jdot_qdot: Vector6::zeros(),

@@ -34,6 +34,7 @@ pub use algorithms::crba::crba;
 pub use algorithms::energy::{kinetic_energy, potential_energy};
 pub use algorithms::jacobian::{frame_jacobian, frame_jdot_qdot, tip_jacobian, tip_jdot_qdot};
 pub use algorithms::kinematics::{forward_kinematics, update_frame_placements};
+pub use algorithms::momentum::momentum_observer_terms;
 pub use algorithms::rnea::{
     gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea, rnea_with_tip_wrench,
 };

@@ -56,6 +56,7 @@ fn no_algorithm_allocates_after_construction() {
         rnea_with_tip_wrench(&model, data, &q, &v, &a, &w).unwrap();
         crba(&model, data, &q).unwrap();
         coriolis_matrix(&model, data, &q, &v).unwrap();
+        momentum_observer_terms(&model, data, &q, &v).unwrap();
         gravity_torque(&model, data, &q).unwrap();
         nonlinear_effects(&model, data, &q, &v).unwrap();
         aba(&model, data, &q, &v, &a).unwrap();

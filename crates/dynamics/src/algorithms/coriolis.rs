@@ -17,7 +17,7 @@ use crate::model::Model;
 use crate::spatial::{add_force_cross_matrix, skew, Force, Inertia, Motion};
 
 #[inline(always)]
-fn motion_of(v: &Vector6<f64>) -> Motion {
+pub(crate) fn motion_of(v: &Vector6<f64>) -> Motion {
     Motion {
         linear: v.fixed_rows::<3>(0).into_owned(),
         angular: v.fixed_rows::<3>(3).into_owned(),
@@ -26,7 +26,7 @@ fn motion_of(v: &Vector6<f64>) -> Motion {
 
 /// `B = 1/2 (v x* Y - Y v x) + 1/2 (Y v) x-bar` for a body of world inertia `Y`.
 #[inline(always)]
-fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
+pub(crate) fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
     // P = Y [v]x with Y = [[m 1, -[h]], [[h], I]] and [v]x = [[[w], [v]], [0, [w]]];
     // then v x* Y - Y v x = -(P + P^T) because Y is symmetric.
     let w = skew(&v.angular);

@@ -6,6 +6,7 @@ pub mod crba;
 pub mod energy;
 pub mod jacobian;
 pub mod kinematics;
+pub mod momentum;
 pub mod rnea;
 
 use crate::data::Data;
