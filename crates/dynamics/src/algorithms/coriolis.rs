@@ -26,7 +26,7 @@ pub(crate) fn motion_of(v: &Vector6<f64>) -> Motion {
 
 /// `B = 1/2 (v x* Y - Y v x) + 1/2 (Y v) x-bar` for a body of world inertia `Y`.
 #[inline(always)]
-pub(crate) fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
+fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
     // P = Y [v]x with Y = [[m 1, -[h]], [[h], I]] and [v]x = [[[w], [v]], [0, [w]]];
     // then v x* Y - Y v x = -(P + P^T) because Y is symmetric.
     let w = skew(&v.angular);
@@ -55,6 +55,28 @@ pub(crate) fn body_christoffel(y: &Inertia, v: &Motion) -> Matrix6<f64> {
     b
 }
 
+/// The forward pass shared with [`crate::momentum_observer_terms`]: joint and body
+/// placements, then per body (base frame) its joint axis `s_i`, `sdot_i = v_i x s_i`, its
+/// Christoffel matrix `B_i`, inertia `Y_i` (the composites start from them) and velocity
+/// `v_i`. Lengths already checked.
+#[inline(always)]
+pub(crate) fn world_forward_pass(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) {
+    update_joint_placements(model, data, q);
+    update_body_placements(data);
+    let mut velocity = Motion::zero();
+    for (i, &vi) in v.iter().enumerate() {
+        let o = &data.body_placements[i];
+        let s = o.act_motion(&model.joints[i].motion_subspace());
+        velocity = velocity + s.scaled(vi);
+        let y = model.bodies[i].transformed(o);
+        data.world_subspace[i] = s.to_vector();
+        data.world_subspace_rate[i] = velocity.cross_motion(&s).to_vector();
+        data.coriolis_b[i] = body_christoffel(&y, &velocity);
+        data.composite[i] = y;
+        data.world_velocity[i] = velocity;
+    }
+}
+
 /// `C(q, v)` into `data.coriolis`. `C v + G = ` [`crate::nonlinear_effects`].
 pub fn coriolis_matrix<'d>(
     model: &Model,
@@ -65,20 +87,7 @@ pub fn coriolis_matrix<'d>(
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
-    update_joint_placements(model, data, q);
-    update_body_placements(data);
-    let mut velocity = Motion::zero();
-    for i in 0..n {
-        let o = &data.body_placements[i];
-        let s = o.act_motion(&model.joints[i].motion_subspace());
-        velocity = velocity + s.scaled(v[i]);
-        let y = model.bodies[i].transformed(o);
-        data.world_subspace[i] = s.to_vector();
-        data.world_subspace_rate[i] = velocity.cross_motion(&s).to_vector();
-        data.coriolis_b[i] = body_christoffel(&y, &velocity);
-        data.composite[i] = y;
-        data.world_velocity[i] = velocity;
-    }
+    world_forward_pass(model, data, q, v);
     for i in (0..n).rev() {
         let s = &data.world_subspace[i];
         let ds = &data.world_subspace_rate[i];

@@ -20,8 +20,7 @@
 
 use nalgebra::Vector6;
 
-use super::coriolis::{body_christoffel, motion_of};
-use crate::algorithms::{update_body_placements, update_joint_placements};
+use super::coriolis::{motion_of, world_forward_pass};
 use crate::data::Data;
 use crate::error::{check_len, DimensionError};
 use crate::model::Model;
@@ -40,20 +39,7 @@ pub fn momentum_observer_terms(
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
-    update_joint_placements(model, data, q);
-    update_body_placements(data);
-    let mut velocity = Motion::zero();
-    for (i, &vi) in v.iter().enumerate() {
-        let o = &data.body_placements[i];
-        let s = o.act_motion(&model.joints[i].motion_subspace());
-        velocity = velocity + s.scaled(vi);
-        let y = model.bodies[i].transformed(o);
-        data.world_subspace[i] = s.to_vector();
-        data.world_subspace_rate[i] = velocity.cross_motion(&s).to_vector();
-        data.coriolis_b[i] = body_christoffel(&y, &velocity);
-        data.composite[i] = y;
-        data.world_velocity[i] = velocity;
-    }
+    world_forward_pass(model, data, q, v);
     let base_acceleration = Motion {
         linear: -model.gravity,
         angular: nalgebra::Vector3::zeros(),
