@@ -45,8 +45,9 @@ const C: [f64; 14] = [
     1.0 / 6_227_020_800.0,
 ];
 
+/// `a * b + c`: one rounding (`f64::mul_add`) in the `FMA` build, two otherwise.
 #[inline(always)]
-fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
+pub(crate) fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
     if FMA {
         a.mul_add(b, c)
     } else {

@@ -51,17 +51,8 @@ impl Isa {
     }
 }
 
-use crate::exp::exp_neg;
 pub(crate) use crate::exp::MAX_EXPONENT;
-
-#[inline(always)]
-fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
-    if FMA {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-}
+use crate::exp::{exp_neg, fmadd};
 
 /// Squared Euclidean distance `||a - b||^2` over the common length (off the hot path).
 #[inline]
