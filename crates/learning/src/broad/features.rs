@@ -97,6 +97,14 @@ pub(crate) struct BlockScratch {
     xs: Option<Slab>,
 }
 
+/// Per-worker scratch of [`FeatureMap::fill_slab`].
+#[derive(Debug, Default)]
+pub(crate) struct SlabScratch {
+    block: BlockScratch,
+    /// One chunk of pattern columns, column-major.
+    chunk: Vec<f64>,
+}
+
 impl FeatureMap {
     pub(crate) fn new(
         standardiser: Standardiser,
@@ -255,6 +263,42 @@ impl FeatureMap {
         }
     }
 
+    /// Pattern rows of the raw inputs `x_rows` (row-major b x d_in, b at most the slab's
+    /// capacity) with the row-major targets `y_rows` (b x d_out) under them, straight
+    /// into a packed slab of P + d_out rows: formed 24 samples at a time in `chunk`
+    /// (about 200 KB at P = 1043, so it stays in L2 until it is packed), never as a
+    /// whole block. The values are those of [`fill_block`](Self::fill_block).
+    pub(crate) fn fill_slab(
+        &self,
+        x_rows: &[f64],
+        y_rows: &[f64],
+        d_out: usize,
+        slab: &mut Slab,
+        scratch: &mut SlabScratch,
+    ) {
+        const CHUNK: usize = 24;
+        let d = self.d_in();
+        let p = self.width();
+        let b = x_rows.len() / d.max(1);
+        slab.set_len(b);
+        if scratch.chunk.len() < p * CHUNK {
+            scratch.chunk.resize(p * CHUNK, 0.0);
+        }
+        let mut s0 = 0;
+        while s0 < b {
+            let c = CHUNK.min(b - s0);
+            let chunk = &mut scratch.chunk[..p * c];
+            self.fill_block(
+                &x_rows[s0 * d..(s0 + c) * d],
+                chunk,
+                &mut scratch.block,
+                Par::Seq,
+            );
+            slab.write_chunk(chunk, p, s0, c, &y_rows[s0 * d_out..], d_out);
+            s0 += c;
+        }
+    }
+
     /// Gaussian rows of the columns of `at` (column-major P x xn.len()) from the `-2 x.u`
     /// they hold and `xn = ||x||^2`.
     fn gauss_columns(&self, at: &mut [f64], xn: &[f64]) {
@@ -314,6 +358,44 @@ mod tests {
                     );
                 }
                 s0 += b;
+            }
+        }
+    }
+
+    /// `fill_slab` (24-sample chunks written into the slab) holds exactly the block that
+    /// `fill_block` forms, packed with its targets, for block sizes around the chunk.
+    #[test]
+    fn fill_slab_equals_the_packed_block() {
+        let (d, l, d_out) = (4, 37, 3);
+        let nodes = NodeSet {
+            dim: d,
+            centres: (0..l * d).map(|i| (i as f64 * 0.377).cos()).collect(),
+            widths: (0..l).map(|j| 0.7 + 0.05 * j as f64).collect(),
+        };
+        let standardiser = Standardiser {
+            mean: vec![0.2; d],
+            std: vec![0.9; d],
+        };
+        let friction = FrictionFeatures {
+            columns: vec![1, 2],
+            scales: vec![0.3, 2.0],
+        };
+        let fm = FeatureMap::new(standardiser, friction, nodes);
+        let p = fm.width();
+        let mut scratch = SlabScratch::default();
+        let mut slab = Slab::new(p + d_out, 80);
+        for b in [1usize, 23, 24, 25, 49, 80] {
+            let x: Vec<f64> = (0..b * d).map(|i| (i as f64 * 0.613).sin() * 1.7).collect();
+            let y: Vec<f64> = (0..b * d_out).map(|i| (i as f64 * 0.29).cos()).collect();
+            fm.fill_slab(&x, &y, d_out, &mut slab, &mut scratch);
+            let mut at = vec![0.0; p * b];
+            fm.fill_block(&x, &mut at, &mut BlockScratch::default(), Par::Seq);
+            let mut packed = Slab::new(p + d_out, 80);
+            packed.pack_with_targets(&at, p, 0, b, &y, d_out);
+            let (got, want) = (slab.data_for_tests(), packed.data_for_tests());
+            assert_eq!(got.len(), want.len(), "b {b}");
+            for (i, (g, w)) in got.iter().zip(want).enumerate() {
+                assert_eq!(g.to_bits(), w.to_bits(), "b {b}: packed value {i}");
             }
         }
     }

@@ -1,16 +1,19 @@
 //! Blocked passes over a data set: the N x P pattern matrix A is never held whole.
-//! Each pass forms the pattern block of `block_rows` rows at a time (column-major P x b,
-//! one pattern row per column) and hands it to a consumer: the Gram accumulation
-//! `G += A_b^T A_b`, `A^T Y += A_b^T Y_b` (METHOD.md section 5, the normal equations of
-//! the ridge solution), the cross terms of a node growth, or validation predictions.
+//! Each pass forms the pattern a block of rows at a time and hands it to a consumer: the
+//! Gram accumulation `G += A_b^T A_b`, `A^T Y += A_b^T Y_b` (METHOD.md section 5, the
+//! normal equations of the ridge solution), the cross terms of a node growth, or
+//! validation predictions.
 //!
 //! The products that dominate a fit, the Gram (with A^T Y) and the growth cross terms,
 //! run on packed slabs with a register-tiled AVX2 + FMA kernel (`kernels/syrk.rs`) when
-//! the CPU has it and each block is handled by one thread; otherwise on faer's matmul.
+//! the CPU has it and each block is handled by one thread: the blocks are then formed
+//! straight into the packed layout ([`for_each_slab`]). Otherwise the blocks are formed
+//! column-major (P x b, one pattern row per column, [`for_each_block`]) for faer's
+//! matmul.
 
 use super::config::GramStrategy;
 use super::data::Dataset;
-use super::features::{BlockScratch, FeatureMap};
+use super::features::{BlockScratch, FeatureMap, SlabScratch};
 use super::kernels::syrk::{self, Store};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
@@ -20,12 +23,8 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 pub(crate) struct Block<'a> {
     /// Pattern, P x b column-major (A_b^T).
     pub at: MatRef<'a, f64>,
-    /// The same pattern as a slice: sample s is `at_cm[s * P..(s + 1) * P]`.
-    pub at_cm: &'a [f64],
     /// Targets of the block, b x d_out (row-major view).
     pub y: MatRef<'a, f64>,
-    /// The same targets as a slice: sample s is `y_rm[s * d_out..(s + 1) * d_out]`.
-    pub y_rm: &'a [f64],
 }
 
 /// Runs `consume` on every block of `data`, with `threads` workers.
@@ -65,9 +64,7 @@ pub(crate) fn for_each_block<S: Send>(
             let y_rm = data.target_rows(r, b);
             let block = Block {
                 at: MatRef::from_column_major_slice(&at[..p * b], p, b),
-                at_cm: &at[..p * b],
                 y: MatRef::from_row_major_slice(y_rm, b, d_out),
-                y_rm,
             };
             consume(state, block, Par::Seq);
             r += b;
@@ -81,32 +78,7 @@ pub(crate) fn for_each_block<S: Send>(
         return vec![s];
     }
     match strategy {
-        GramStrategy::PerThread => {
-            // Contiguous ranges, block-aligned so the blocks are full.
-            let n_blocks = n.div_ceil(block_rows);
-            let per = n_blocks.div_ceil(threads);
-            std::thread::scope(|scope| {
-                let handles: Vec<_> = (0..threads)
-                    .filter_map(|t| {
-                        let start = (t * per * block_rows).min(n);
-                        let end = ((t + 1) * per * block_rows).min(n);
-                        (start < end).then(|| {
-                            let run_range = &run_range;
-                            let init = &init;
-                            scope.spawn(move || {
-                                let mut s = init();
-                                run_range(start, end, &mut s);
-                                s
-                            })
-                        })
-                    })
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().expect("broad worker panicked"))
-                    .collect()
-            })
-        }
+        GramStrategy::PerThread => on_ranges(n, block_rows, threads, &init, &run_range),
         GramStrategy::SharedGemm => {
             let mut state = init();
             let mut at = vec![0.0; p * block_rows];
@@ -132,9 +104,7 @@ pub(crate) fn for_each_block<S: Send>(
                 let y_rm = data.target_rows(r, b);
                 let block = Block {
                     at: MatRef::from_column_major_slice(&at[..p * b], p, b),
-                    at_cm: &at[..p * b],
                     y: MatRef::from_row_major_slice(y_rm, b, d_out),
-                    y_rm,
                 };
                 consume(&mut state, block, par);
                 r += b;
@@ -142,6 +112,76 @@ pub(crate) fn for_each_block<S: Send>(
             vec![state]
         }
     }
+}
+
+/// Cuts `0..n` into `threads` contiguous, block-aligned ranges (so that the blocks are
+/// full) and runs `run_range` on each in its own thread, with its own state.
+fn on_ranges<S: Send>(
+    n: usize,
+    block_rows: usize,
+    threads: usize,
+    init: &(impl Fn() -> S + Sync),
+    run_range: &(impl Fn(usize, usize, &mut S) + Sync),
+) -> Vec<S> {
+    let n_blocks = n.div_ceil(block_rows);
+    let per = n_blocks.div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .filter_map(|t| {
+                let start = (t * per * block_rows).min(n);
+                let end = ((t + 1) * per * block_rows).min(n);
+                (start < end).then(|| {
+                    scope.spawn(move || {
+                        let mut s = init();
+                        run_range(start, end, &mut s);
+                        s
+                    })
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("broad worker panicked"))
+            .collect()
+    })
+}
+
+/// The packed path's pass: runs `consume` on the `[pattern | targets]` slab (P + d_out
+/// rows, see [`FeatureMap::fill_slab`]) of every block of at most `slab_rows` samples
+/// (capped at `syrk::KC`), the rows cut between `threads` workers as in the `PerThread`
+/// strategy of [`for_each_block`], each with its own state (from `init`). Each block is
+/// formed straight into the slab, never as a column-major block: that saves a 4 MB
+/// buffer per worker (at P = 1043) beside the slab and the Gram in L3, and a copy.
+fn for_each_slab<S: Send>(
+    fm: &FeatureMap,
+    data: &Dataset<'_>,
+    slab_rows: usize,
+    threads: usize,
+    init: impl Fn() -> S + Sync,
+    consume: impl Fn(&mut S, &syrk::Slab, &[f64]) + Sync,
+) -> Vec<S> {
+    let n = data.n_samples();
+    let d_out = data.d_out();
+    let slab_rows = slab_rows.clamp(1, syrk::KC);
+    let threads = threads.max(1);
+    let run_range = |start: usize, end: usize, state: &mut S| {
+        let mut slab = syrk::Slab::new(fm.width() + d_out, slab_rows);
+        let mut scratch = SlabScratch::default();
+        let mut r = start;
+        while r < end {
+            let b = slab_rows.min(end - r);
+            let y_rm = data.target_rows(r, b);
+            fm.fill_slab(data.input_rows(r, b), y_rm, d_out, &mut slab, &mut scratch);
+            consume(state, &slab, y_rm);
+            r += b;
+        }
+    };
+    if threads == 1 || n < 2 * slab_rows {
+        let mut s = init();
+        run_range(0, n, &mut s);
+        return vec![s];
+    }
+    on_ranges(n, slab_rows, threads, &init, &run_range)
 }
 
 /// Accumulated normal-equation terms of a data set.
@@ -180,10 +220,9 @@ fn add_y_stats(y: MatRef<'_, f64>, y_sum: &mut [f64], y_sq: &mut [f64]) {
 
 /// Whether the blocks of a pass go through the packed SIMD kernel: the CPU has AVX2 +
 /// FMA and each block is consumed by one thread (the `SharedGemm` strategy parallelises
-/// inside faer's matmul instead). Such passes use blocks of at most `syrk::KC` rows, so
-/// that a block's pattern (about 2 MB at P = 1043) stays in cache between its formation,
-/// its packing and the products, and every block is consumed with `Par::Seq`. `allow`
-/// false forces faer (tests).
+/// inside faer's matmul instead). Such passes run on [`for_each_slab`], blocks of at most
+/// `syrk::KC` rows formed straight into their packed slabs. `allow` false forces faer
+/// (tests).
 fn simd_rows(
     block_rows: usize,
     threads: usize,
@@ -203,7 +242,6 @@ struct GramPart {
     aty: Mat<f64>,
     y_sum: Vec<f64>,
     y_sq: Vec<f64>,
-    slab: Option<syrk::Slab>,
 }
 
 /// G = A^T A (lower triangle, symmetric rank-k updates), A^T Y and the target sums:
@@ -232,31 +270,26 @@ fn gram_pass(
     // Packed path: Y rides along as d_out extra rows, so that one symmetric product
     // gives A^T A and A^T Y (its last rows) at the kernel's speed.
     let n = if simd.is_some() { p + d_out } else { p };
-    let parts = for_each_block(
-        fm,
-        data,
-        simd.unwrap_or(block_rows),
-        threads,
-        strategy,
-        || GramPart {
-            g: vec![0.0; n * n],
-            aty: Mat::zeros(p, d_out),
-            y_sum: vec![0.0; d_out],
-            y_sq: vec![0.0; d_out],
-            slab: None,
-        },
-        |acc, block, par| {
-            let b = block.at.ncols();
-            if simd.is_some() {
-                let slab = acc.slab.get_or_insert_with(|| syrk::Slab::new(n, syrk::KC));
-                let mut s0 = 0;
-                while s0 < b {
-                    let k = syrk::KC.min(b - s0);
-                    slab.pack_with_targets(block.at_cm, p, s0, k, block.y_rm, d_out);
-                    syrk::gemm_nt(&mut acc.g, n, slab, slab, Store::AddLower);
-                    s0 += k;
-                }
-            } else {
+    let init = || GramPart {
+        g: vec![0.0; n * n],
+        aty: Mat::zeros(p, d_out),
+        y_sum: vec![0.0; d_out],
+        y_sq: vec![0.0; d_out],
+    };
+    let parts = match simd {
+        Some(rows) => for_each_slab(fm, data, rows, threads, init, |acc, slab, y_rm| {
+            syrk::gemm_nt(&mut acc.g, n, slab, slab, Store::AddLower);
+            let y = MatRef::from_row_major_slice(y_rm, y_rm.len() / d_out.max(1), d_out);
+            add_y_stats(y, &mut acc.y_sum, &mut acc.y_sq);
+        }),
+        None => for_each_block(
+            fm,
+            data,
+            block_rows,
+            threads,
+            strategy,
+            init,
+            |acc, block, par| {
                 tri_matmul(
                     MatMut::from_column_major_slice_mut(&mut acc.g, n, n)
                         .subrows_mut(0, p)
@@ -271,10 +304,10 @@ fn gram_pass(
                     par,
                 );
                 matmul(acc.aty.as_mut(), Accum::Add, block.at, block.y, 1.0, par);
-            }
-            add_y_stats(block.y, &mut acc.y_sum, &mut acc.y_sq);
-        },
-    );
+                add_y_stats(block.y, &mut acc.y_sum, &mut acc.y_sq);
+            },
+        ),
+    };
     // Summed into the first worker's share (one Gram-sized buffer less at the peak).
     let mut parts = parts.into_iter();
     let Some(mut sum) = parts.next() else {
@@ -337,29 +370,31 @@ fn new_rows_pass(
     let d_out = data.d_out();
     let simd = simd_rows(block_rows, threads, strategy, allow_simd);
     let n = if simd.is_some() { p + d_out } else { p };
-    let parts = for_each_block(
-        fm,
-        data,
-        simd.unwrap_or(block_rows),
-        threads,
-        strategy,
-        || (vec![0.0; n * k], Mat::<f64>::zeros(k, d_out), None),
-        |(cross, aty, slabs), block, par| {
-            let b = block.at.ncols();
-            let new_t = block.at.subrows(p_old, k);
-            if simd.is_some() {
-                let (all, new) = slabs.get_or_insert_with(|| {
-                    (syrk::Slab::new(n, syrk::KC), syrk::Slab::new(k, syrk::KC))
-                });
-                let mut s0 = 0;
-                while s0 < b {
-                    let kc = syrk::KC.min(b - s0);
-                    all.pack_with_targets(block.at_cm, p, s0, kc, block.y_rm, d_out);
-                    new.pack(block.at_cm, p, p_old, s0, kc);
-                    syrk::gemm_nt(cross, n, all, new, Store::Add);
-                    s0 += kc;
-                }
-            } else {
+    let init = || (vec![0.0; n * k], Mat::<f64>::zeros(k, d_out));
+    let parts = match simd {
+        Some(rows) => for_each_slab(
+            fm,
+            data,
+            rows,
+            threads,
+            || (init(), syrk::Slab::new(k, rows.clamp(1, syrk::KC))),
+            |((cross, _), new), all, _| {
+                new.copy_rows(all, p_old);
+                syrk::gemm_nt(cross, n, all, new, Store::Add);
+            },
+        )
+        .into_iter()
+        .map(|(part, _)| part)
+        .collect(),
+        None => for_each_block(
+            fm,
+            data,
+            block_rows,
+            threads,
+            strategy,
+            init,
+            |(cross, aty), block, par| {
+                let new_t = block.at.subrows(p_old, k);
                 matmul(
                     MatMut::from_column_major_slice_mut(cross, n, k),
                     Accum::Add,
@@ -369,12 +404,12 @@ fn new_rows_pass(
                     par,
                 );
                 matmul(aty.as_mut(), Accum::Add, new_t, block.y, 1.0, par);
-            }
-        },
-    );
+            },
+        ),
+    };
     let mut rows = Mat::<f64>::zeros(k, p);
     let mut aty = Mat::<f64>::zeros(k, d_out);
-    for (cross, a, _) in &parts {
+    for (cross, a) in &parts {
         let c = MatRef::from_column_major_slice(cross, n, k);
         rows += c.subrows(0, p).transpose();
         if n > p {

@@ -98,8 +98,10 @@ impl Slab {
     ///
     /// # Panics
     /// If `k` exceeds the capacity or the block is too short (caller bugs).
+    #[cfg(test)]
     pub(crate) fn pack(&mut self, at: &[f64], ld: usize, row0: usize, s0: usize, k: usize) {
-        self.pack_parts(at, ld, row0, s0, k, &[], 0);
+        self.set_len(k);
+        self.write_samples(at, ld, row0, s0, 0, k, &[], 0);
     }
 
     /// Packs `[pattern | targets]`: the first `rows - d` rows from `at` as in
@@ -108,6 +110,7 @@ impl Slab {
     ///
     /// # Panics
     /// If `d > rows`, `k` exceeds the capacity or a source is too short (caller bugs).
+    #[cfg(test)]
     pub(crate) fn pack_with_targets(
         &mut self,
         at: &[f64],
@@ -117,47 +120,81 @@ impl Slab {
         y: &[f64],
         d: usize,
     ) {
-        self.pack_parts(at, ld, 0, s0, k, y, d);
+        self.set_len(k);
+        self.write_samples(at, ld, 0, s0, 0, k, y, d);
     }
 
+    /// Sets the contraction length to `k` (contents stale until written), so that a
+    /// slab can be filled a few samples at a time with [`write_chunk`](Self::write_chunk).
+    ///
+    /// # Panics
+    /// If `k` exceeds the capacity (a caller bug).
+    pub(crate) fn set_len(&mut self, k: usize) {
+        assert!(k <= self.cap, "slab capacity exceeded");
+        self.k = k;
+    }
+
+    /// Writes samples `dst .. dst + count` of `[pattern | targets]` as in
+    /// [`pack_with_targets`](Self::pack_with_targets), from the first `count` columns of
+    /// the column-major chunk `at` (leading dimension `ld`) and the first `count` rows
+    /// of the row-major targets `y`. Forming a block's pattern a few samples at a time
+    /// and writing each chunk at once keeps the chunk in L2 and needs no block-sized
+    /// buffer beside the slab.
+    ///
+    /// # Panics
+    /// If the samples lie beyond the length set by [`set_len`](Self::set_len), or a
+    /// source is too short (caller bugs).
+    pub(crate) fn write_chunk(
+        &mut self,
+        at: &[f64],
+        ld: usize,
+        dst: usize,
+        count: usize,
+        y: &[f64],
+        d: usize,
+    ) {
+        assert!(dst + count <= self.k, "chunk beyond the slab's length");
+        self.write_samples(at, ld, 0, 0, dst, count, y, d);
+    }
+
+    /// Samples `s0 .. s0 + count` of the sources into slab samples `dst .. dst + count`.
     #[allow(clippy::too_many_arguments)]
-    fn pack_parts(
+    fn write_samples(
         &mut self,
         at: &[f64],
         ld: usize,
         row0: usize,
         s0: usize,
-        k: usize,
+        dst: usize,
+        count: usize,
         y: &[f64],
         d: usize,
     ) {
-        assert!(k <= self.cap, "slab capacity exceeded");
         assert!(d <= self.rows, "more target rows than rows");
         let rows = self.rows;
         let n_at = rows - d;
-        let k4 = PW * k;
-        self.k = k;
-        if k == 0 {
+        let k4 = PW * self.k;
+        if count == 0 {
             return;
         }
         if n_at > 0 {
             assert!(row0 + n_at <= ld, "row range outside the block");
             assert!(
-                (s0 + k - 1) * ld + row0 + n_at <= at.len(),
+                (s0 + count - 1) * ld + row0 + n_at <= at.len(),
                 "block too short"
             );
         }
-        assert!((s0 + k) * d <= y.len(), "targets too short");
-        let dst = &mut self.buf[self.off..self.off + self.panels * k4];
+        assert!((s0 + count) * d <= y.len(), "targets too short");
+        let buf = &mut self.buf[self.off..self.off + self.panels * k4];
         // Whole panels from `at`, 8 samples at a time: each panel receives 32
         // contiguous values (whole cache lines) from 8 sequential column streams.
         let full = n_at / PW;
         const G: usize = 8;
         let mut s = 0;
-        while s < k {
-            let g = G.min(k - s);
+        while s < count {
+            let g = G.min(count - s);
             for q in 0..full {
-                let out = &mut dst[q * k4 + PW * s..][..PW * g];
+                let out = &mut buf[q * k4 + PW * (dst + s)..][..PW * g];
                 for (t, o) in out.chunks_exact_mut(PW).enumerate() {
                     o.copy_from_slice(&at[(s0 + s + t) * ld + row0 + q * PW..][..PW]);
                 }
@@ -166,8 +203,8 @@ impl Slab {
         }
         // The rest value by value: the last rows of `at`, the targets, zeros.
         for i in full * PW..self.panels * PW {
-            let out = &mut dst[(i / PW) * k4 + i % PW..];
-            for s in 0..k {
+            let out = &mut buf[(i / PW) * k4 + PW * dst + i % PW..];
+            for s in 0..count {
                 out[PW * s] = if i < n_at {
                     at[(s0 + s) * ld + row0 + i]
                 } else if i < rows {
@@ -175,6 +212,33 @@ impl Slab {
                 } else {
                     0.0
                 };
+            }
+        }
+    }
+
+    /// Copies rows `row0 .. row0 + self.rows` of `src` (all its samples), e.g. the new
+    /// nodes' rows of a growth out of the whole pattern's slab.
+    ///
+    /// # Panics
+    /// If the rows lie outside `src` or its length exceeds the capacity (caller bugs).
+    pub(crate) fn copy_rows(&mut self, src: &Slab, row0: usize) {
+        assert!(row0 + self.rows <= src.rows, "rows outside the source slab");
+        self.set_len(src.k);
+        let (k, k4) = (src.k, PW * src.k);
+        let from = src.data();
+        let to = &mut self.buf[self.off..self.off + self.panels * k4];
+        for i in 0..self.panels * PW {
+            let out = &mut to[(i / PW) * k4 + i % PW..];
+            if i < self.rows {
+                let r = row0 + i;
+                let inp = &from[(r / PW) * k4 + r % PW..];
+                for s in 0..k {
+                    out[PW * s] = inp[PW * s];
+                }
+            } else {
+                for s in 0..k {
+                    out[PW * s] = 0.0;
+                }
             }
         }
     }
@@ -215,6 +279,12 @@ impl Slab {
     /// The packed data (`panels * 4k` values).
     fn data(&self) -> &[f64] {
         &self.buf[self.off..self.off + self.panels * PW * self.k]
+    }
+
+    /// The packed data, for comparisons in other modules' tests.
+    #[cfg(test)]
+    pub(crate) fn data_for_tests(&self) -> &[f64] {
+        self.data()
     }
 }
 
@@ -700,6 +770,54 @@ mod tests {
                         assert!(err <= 1e-13 * scale + 1e-15, "{what} rows {i} {j}: {err:e}");
                     }
                 }
+            }
+        }
+    }
+
+    /// A slab written a few samples at a time holds exactly what one packing of the
+    /// whole block holds, and `copy_rows` cuts the same rows that packing them gives
+    /// (including the zero rows that pad the last panels). Compared bit for bit.
+    #[test]
+    fn chunked_writes_and_row_copies_equal_whole_packing() {
+        for &(p, d, k, cap) in &[
+            (1, 1, 1, 1),
+            (6, 2, 5, 8),
+            (29, 7, 33, 40),
+            (103, 7, 257, 300),
+        ] {
+            let at = values(p * k, 11 + p as u64);
+            let y = values(d * k, 12 + d as u64);
+            let mut whole = Slab::new(p + d, cap);
+            whole.pack_with_targets(&at, p, 0, k, &y, d);
+            let mut chunked = Slab::new(p + d, cap);
+            // Stale contents first: every value must be overwritten.
+            chunked.pack_with_targets(&values(p * cap, 99), p, 0, cap, &values(d * cap, 98), d);
+            chunked.set_len(k);
+            let mut s0 = 0;
+            for c in [1usize, 7, 24, 3].iter().cycle() {
+                if s0 == k {
+                    break;
+                }
+                let c = (*c).min(k - s0);
+                chunked.write_chunk(&at[s0 * p..], p, s0, c, &y[s0 * d..], d);
+                s0 += c;
+            }
+            assert_eq!(whole.data(), chunked.data(), "P {p} d {d} k {k}");
+            for (row0, rows) in [(0, p + d), (p / 2, p - p / 2), (p + d - 1, 1)] {
+                let mut cut = Slab::new(rows, cap);
+                cut.copy_rows(&whole, row0);
+                let mut aug = vec![0.0; (p + d) * k];
+                for s in 0..k {
+                    aug[s * (p + d)..][..p].copy_from_slice(&at[s * p..][..p]);
+                    aug[s * (p + d) + p..][..d].copy_from_slice(&y[s * d..][..d]);
+                }
+                let mut packed = Slab::new(rows, cap);
+                packed.pack(&aug, p + d, row0, 0, k);
+                assert_eq!(
+                    cut.data(),
+                    packed.data(),
+                    "rows {row0}.. of P {p} d {d} k {k}"
+                );
             }
         }
     }
