@@ -34,7 +34,7 @@ fn nn_controller_tracks_a_sine_with_falling_error_and_bounded_weights() {
     let mut wf = Vec::new();
     let mut wt = Vec::new();
     let log = simulate(&mut adaptive, &model, &sine, &opts, |t, c| {
-        if (t * 1000.0).round() as u64 % 1000 == 0 {
+        if ((t * 1000.0).round() as u64).is_multiple_of(1000) {
             wf.push(c.weight_norm(NetworkId::F));
             wt.push(c.weight_norm(NetworkId::Deadzone));
         }

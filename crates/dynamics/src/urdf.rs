@@ -719,7 +719,8 @@ fn build(ctx: &Ctx, base: Option<&str>, tip: Option<&str>) -> Result<Model, Urdf
         JointKind::Prismatic => lb.mass,
         _ => lj.axis.dot(&(lb.rotational * lj.axis)),
     };
-    if !(resisting > 0.0) {
+    // Also rejects NaN.
+    if resisting.is_nan() || resisting <= 0.0 {
         return Err(UrdfError {
             file: ctx.file.to_string(),
             line: moving_lines.last().copied(),

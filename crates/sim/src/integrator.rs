@@ -128,8 +128,8 @@ impl Plant {
         let no_damping = self.dynx.env.damping_diag().iter().all(|c| *c == 0.0);
         match self.dynx.implicit.last_torque() {
             Some(f) if no_damping && matrix_path => {
-                for i in 0..n {
-                    self.acc_friction[i] -= f[i];
+                for (acc, fi) in self.acc_friction.iter_mut().zip(f).take(n) {
+                    *acc -= fi;
                 }
             }
             _ => self.accumulate_dissipation(1.0, false),

@@ -1,6 +1,9 @@
 //! Articulated-body algorithm: forward dynamics `qddot = M^-1 (tau - C qdot - G)`
 //! (METHOD.md eq. 1 solved for the acceleration; the simulator's plant).
 
+// Joint index addresses several parallel per-joint arrays; read clearest indexed.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{DVector, Vector3, Vector6};
 
 use crate::algorithms::update_joint_placements;

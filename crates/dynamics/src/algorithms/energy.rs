@@ -1,5 +1,8 @@
 //! Kinetic and potential energy, for integrator and conservation checks.
 
+// Joint index addresses several parallel per-joint arrays; read clearest indexed.
+#![allow(clippy::needless_range_loop)]
+
 use crate::algorithms::{update_body_placements, update_joint_placements};
 use crate::data::Data;
 use crate::error::{check_len, DimensionError};

@@ -1,5 +1,8 @@
 //! Geometric Jacobians of frames and the bias term `Jdot qdot`.
 
+// Joint index addresses several parallel per-joint arrays; read clearest indexed.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{Matrix6xX, Vector3, Vector6};
 
 use crate::algorithms::{update_body_placements, update_joint_placements};

@@ -30,9 +30,10 @@ pub struct RunSummary {
 /// A failure of a whole run: a scenario problem or an I/O problem writing the folder.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
-    /// The scenario is invalid.
+    /// The scenario is invalid (boxed, so that `RunError` stays small for callers'
+    /// closures such as the `finish` hook).
     #[error("{0}")]
-    Scenario(#[from] ScenarioError),
+    Scenario(Box<ScenarioError>),
     /// A finishing step (report, figures, recording) failed.
     #[error("{0}")]
     Finish(String),
@@ -44,6 +45,12 @@ pub enum RunError {
         /// The error.
         source: std::io::Error,
     },
+}
+
+impl From<ScenarioError> for RunError {
+    fn from(e: ScenarioError) -> Self {
+        RunError::Scenario(Box::new(e))
+    }
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
