@@ -314,26 +314,34 @@ impl FeatureMap {
 mod tests {
     use super::*;
 
-    /// The packed distance product (AVX2 + FMA machines) and faer's give the same block,
-    /// and both the per-sample pattern rows of `fill_row` (direct distances).
-    #[test]
-    fn fill_block_paths_agree_with_fill_row() {
-        let (n, d, l) = (37, 5, 29);
-        let x: Vec<f64> = (0..n * d).map(|i| (i as f64 * 0.731).sin() * 2.0).collect();
+    /// A feature map on `d` inputs with `l` deterministic nodes, inputs standardised with
+    /// `mean` and `std` on every column, and friction features on `columns` x `scales`.
+    fn test_map(
+        d: usize,
+        l: usize,
+        (mean, std): (f64, f64),
+        columns: Vec<usize>,
+        scales: Vec<f64>,
+    ) -> FeatureMap {
         let nodes = NodeSet {
             dim: d,
             centres: (0..l * d).map(|i| (i as f64 * 0.377).cos()).collect(),
             widths: (0..l).map(|j| 0.7 + 0.05 * j as f64).collect(),
         };
         let standardiser = Standardiser {
-            mean: vec![0.1; d],
-            std: vec![1.3; d],
+            mean: vec![mean; d],
+            std: vec![std; d],
         };
-        let friction = FrictionFeatures {
-            columns: vec![0, 3],
-            scales: vec![0.5],
-        };
-        let fm = FeatureMap::new(standardiser, friction, nodes);
+        FeatureMap::new(standardiser, FrictionFeatures { columns, scales }, nodes)
+    }
+
+    /// The packed distance product (AVX2 + FMA machines) and faer's give the same block,
+    /// and both the per-sample pattern rows of `fill_row` (direct distances).
+    #[test]
+    fn fill_block_paths_agree_with_fill_row() {
+        let (n, d, l) = (37, 5, 29);
+        let x: Vec<f64> = (0..n * d).map(|i| (i as f64 * 0.731).sin() * 2.0).collect();
+        let fm = test_map(d, l, (0.1, 1.3), vec![0, 3], vec![0.5]);
         let mut fm_faer = fm.clone();
         fm_faer.centres_packed = None;
         let p = fm.width();
@@ -367,20 +375,7 @@ mod tests {
     #[test]
     fn fill_slab_equals_the_packed_block() {
         let (d, l, d_out) = (4, 37, 3);
-        let nodes = NodeSet {
-            dim: d,
-            centres: (0..l * d).map(|i| (i as f64 * 0.377).cos()).collect(),
-            widths: (0..l).map(|j| 0.7 + 0.05 * j as f64).collect(),
-        };
-        let standardiser = Standardiser {
-            mean: vec![0.2; d],
-            std: vec![0.9; d],
-        };
-        let friction = FrictionFeatures {
-            columns: vec![1, 2],
-            scales: vec![0.3, 2.0],
-        };
-        let fm = FeatureMap::new(standardiser, friction, nodes);
+        let fm = test_map(d, l, (0.2, 0.9), vec![1, 2], vec![0.3, 2.0]);
         let p = fm.width();
         let mut scratch = SlabScratch::default();
         let mut slab = Slab::new(p + d_out, 80);
