@@ -645,3 +645,64 @@ fn growth_at_last_input_trains_the_new_node() {
         Err(RbfError::NoActivations)
     );
 }
+
+/// Discard and growth across several blocks of the kernels' centre layout (blocks of 32
+/// nodes): after removing nodes from every block and adding new ones, every activation and
+/// the output equal eq. 9 and eq. 10 computed by hand from the public centres.
+#[test]
+fn activations_follow_the_centres_through_discard_and_growth_over_many_blocks() {
+    let d = 5;
+    let centre = |i: usize| -> Vec<f64> {
+        (0..d)
+            .map(|k| ((i * 7 + k * 3) as f64 * 0.61).sin() * 2.0)
+            .collect()
+    };
+    let mut layer = GaussianRbfLayer::empty(
+        d,
+        3,
+        160,
+        LayerOptions {
+            relevance_window: 1,
+            min_activation: 0.0,
+            ..options(1.0, 0.0)
+        },
+    )
+    .unwrap();
+    // Every third node is narrow: irrelevant at the tracked input, it goes; the others are
+    // wide and stay, so the survivors move within and across blocks.
+    for i in 0..100 {
+        let width = if i % 3 == 1 {
+            0.05
+        } else {
+            3.0 + (i % 4) as f64 * 0.25
+        };
+        layer.add_node(&centre(i), width).unwrap();
+    }
+    for (i, w) in layer.weights_mut().iter_mut().enumerate() {
+        *w = (i as f64 * 0.37).cos();
+    }
+    layer.activate(&centre(0)).unwrap();
+    layer.track_relevance().unwrap();
+    assert_eq!(layer.discard(1e-3), 33);
+    for i in 100..150 {
+        layer.add_node(&centre(i), 0.8).unwrap();
+    }
+    assert!(layer.len() > 64, "{} nodes", layer.len());
+    let z: Vec<f64> = (0..d).map(|k| 0.3 * k as f64 - 0.5).collect();
+    let mut out = [0.0; 3];
+    layer.evaluate(&z, &mut out).unwrap();
+    let mut expected = [0.0; 3];
+    for i in 0..layer.len() {
+        let c = layer.centre(i).unwrap();
+        let eta = layer.widths()[i];
+        let r2: f64 = z.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum();
+        let s = (-r2 / (eta * eta)).exp();
+        assert!(close(layer.activations()[i], s, 1e-13), "node {i}");
+        for (e, w) in expected.iter_mut().zip(layer.weight_row(i).unwrap()) {
+            *e += s * w;
+        }
+    }
+    for (o, e) in out.iter().zip(&expected) {
+        assert!(close(*o, *e, 1e-12), "{o} vs {e}");
+    }
+}

@@ -24,7 +24,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Standardised inputs of a uniform random subsample of `m` rows (sorted row order),
-/// transposed: dim x m, sample index fastest.
+/// block-major (`kernels::block_major_index`), the layout `kernels::sqdist` reads.
 pub(crate) fn subsample_standardised(
     data: &Dataset<'_>,
     std: &Standardiser,
@@ -41,14 +41,14 @@ pub(crate) fn subsample_standardised(
     for (i, &r) in idx.iter().enumerate() {
         std.apply(data.input_row(r), &mut row);
         for k in 0..d {
-            pts_t[k * m + i] = row[k];
+            pts_t[kernels::block_major_index(m, d, k, i)] = row[k];
         }
     }
     (pts_t, m)
 }
 
-/// k-means++ seeding: chooses `count` new centres from the candidate points `pts_t`
-/// (dim x m, transposed), given `existing` centres (row-major, may be empty: then the
+/// k-means++ seeding: chooses `count` new centres from the `m` candidate points `pts_t`
+/// (block-major, `kernels::block_major_index`), given `existing` centres (row-major, may be empty: then the
 /// first centre is uniform). Returns the new centres row-major (count x dim).
 ///
 /// When every candidate coincides with a centre already chosen (fewer distinct points
@@ -106,7 +106,7 @@ pub(crate) fn kmeanspp(
             rng.random_range(0..m)
         };
         for k in 0..dim {
-            c[k] = pts_t[k * m + pick];
+            c[k] = pts_t[kernels::block_major_index(m, dim, k, pick)];
         }
         out.extend_from_slice(&c);
         update(&c, &mut mind, &mut dist);
@@ -213,12 +213,13 @@ mod tests {
     fn kmeanspp_spreads_over_clusters() {
         // Three tight clusters far apart: k-means++ with 3 centres puts one in each.
         let m = 300;
-        let mut pts_t = vec![0.0; 2 * m];
+        let mut pts = vec![0.0; 2 * m];
         for i in 0..m {
             let c = (i % 3) as f64 * 10.0;
-            pts_t[i] = c + (i as f64 * 0.37).sin() * 0.01;
-            pts_t[m + i] = -c + (i as f64 * 0.91).cos() * 0.01;
+            pts[2 * i] = c + (i as f64 * 0.37).sin() * 0.01;
+            pts[2 * i + 1] = -c + (i as f64 * 0.91).cos() * 0.01;
         }
+        let pts_t = kernels::block_major(&pts, 2, m);
         for seed in 0..20 {
             let mut rng = rng_from_seed(seed);
             let c = kmeanspp(&pts_t, m, 2, &[], 3, &mut rng);

@@ -113,12 +113,7 @@ impl FeatureMap {
     ) -> Self {
         let d = nodes.dim;
         let l = nodes.len();
-        let mut centres_t = vec![0.0; d * l];
-        for j in 0..l {
-            for k in 0..d {
-                centres_t[k * l + j] = nodes.centres[j * d + k];
-            }
-        }
+        let centres_t = kernels::block_major(&nodes.centres, d, l);
         let un = nodes
             .centres
             .chunks_exact(d.max(1))

@@ -137,18 +137,49 @@ fn exp_slice_body<const FMA: bool>(v: &mut [f64]) {
     }
 }
 
+/// Points per block of the block-major layout read by [`sqdist`].
+const SQDIST_BLOCK: usize = 16;
+
+/// Position of coordinate `k` of point `j` in the block-major copy of `l` points of
+/// dimension `d`: the first `l / 16 * 16` points in blocks of 16, each block dimension-major
+/// (`d * 16` values, coordinate `k` of its 16 points side by side), then the remaining
+/// points dimension-major. [`sqdist`] reads the whole copy as one sequential stream, which
+/// the hardware prefetchers follow (a plain dimension-major copy reads `d` streams `l`
+/// values apart).
+#[inline]
+pub(crate) fn block_major_index(l: usize, d: usize, k: usize, j: usize) -> usize {
+    const W: usize = SQDIST_BLOCK;
+    let full = l / W * W;
+    if j < full {
+        (j / W) * W * d + k * W + j % W
+    } else {
+        full * d + k * (l - full) + (j - full)
+    }
+}
+
+/// Block-major copy ([`block_major_index`]) of `l` row-major points of dimension `d`.
+pub(crate) fn block_major(points: &[f64], d: usize, l: usize) -> Vec<f64> {
+    let mut out = vec![0.0; d * l];
+    for (j, p) in points.chunks_exact(d.max(1)).take(l).enumerate() {
+        for (k, &x) in p.iter().enumerate() {
+            out[block_major_index(l, d, k, j)] = x;
+        }
+    }
+    out
+}
+
 #[inline(always)]
-fn sqdist_body<const FMA: bool>(xs: &[f64], centres_t: &[f64], dist: &mut [f64]) {
+fn sqdist_body<const FMA: bool>(xs: &[f64], centres: &[f64], dist: &mut [f64]) {
     // Register-blocked: 16 nodes at a time stay in registers over all input dimensions.
-    const W: usize = 16;
+    const W: usize = SQDIST_BLOCK;
     let l = dist.len();
     let d = xs.len();
-    let centres_t = &centres_t[..d * l];
-    let mut j0 = 0;
-    while j0 + W <= l {
+    let centres = &centres[..d * l];
+    let full = l / W * W;
+    let (blocks, tail) = centres.split_at(full * d);
+    for (block, out) in blocks.chunks_exact(W * d).zip(dist.chunks_exact_mut(W)) {
         let mut acc = [0.0f64; W];
-        for (k, &x) in xs.iter().enumerate() {
-            let row = &centres_t[k * l + j0..k * l + j0 + W];
+        for (&x, row) in xs.iter().zip(block.chunks_exact(W)) {
             for t in 0..W {
                 let e = x - row[t];
                 acc[t] = if FMA {
@@ -158,16 +189,16 @@ fn sqdist_body<const FMA: bool>(xs: &[f64], centres_t: &[f64], dist: &mut [f64])
                 };
             }
         }
-        dist[j0..j0 + W].copy_from_slice(&acc);
-        j0 += W;
+        out.copy_from_slice(&acc);
     }
-    for j in j0..l {
+    let rem = l - full;
+    for (t, out) in dist[full..].iter_mut().enumerate() {
         let mut acc = 0.0;
         for (k, &x) in xs.iter().enumerate() {
-            let e = x - centres_t[k * l + j];
+            let e = x - tail[k * rem + t];
             acc = if FMA { e.mul_add(e, acc) } else { e * e + acc };
         }
-        dist[j] = acc;
+        *out = acc;
     }
 }
 
@@ -260,8 +291,8 @@ pub(crate) fn gauss_from_sqdist(d2: &mut [f64], inv_eta2: &[f64]) {
     gauss_from_sqdist_body::<false>(d2, inv_eta2)
 }
 
-/// `dist[j] <- sum_k (xs[k] - centres_t[k * L + j])^2` with L = dist.len() and the
-/// centres stored transposed (node index fastest).
+/// `dist[j] <- sum_k (xs[k] - c_j[k])^2` for the L = dist.len() points `c_j` stored
+/// block-major ([`block_major_index`]).
 #[inline]
 pub(crate) fn sqdist(xs: &[f64], centres_t: &[f64], dist: &mut [f64]) {
     debug_assert!(centres_t.len() >= xs.len() * dist.len());
@@ -440,13 +471,18 @@ mod tests {
         assert!((dot(&a, &b) - naive).abs() < 1e-12);
         let l = 37;
         let d = 5;
-        let ct: Vec<f64> = (0..l * d).map(|i| (i as f64 * 0.3).sin()).collect();
+        // Row-major points; 37 = two blocks of 16 and a tail of 5.
+        let pts: Vec<f64> = (0..l * d).map(|i| (i as f64 * 0.3).sin()).collect();
+        let ct = block_major(&pts, d, l);
         let xs: Vec<f64> = (0..d).map(|i| i as f64 * 0.1).collect();
         let mut dist = vec![0.0; l];
         sqdist(&xs, &ct, &mut dist);
         for j in 0..l {
-            let e: f64 = (0..d).map(|k| (xs[k] - ct[k * l + j]).powi(2)).sum();
+            let e: f64 = (0..d).map(|k| (xs[k] - pts[j * d + k]).powi(2)).sum();
             assert!((dist[j] - e).abs() < 1e-14);
+            for k in 0..d {
+                assert_eq!(ct[block_major_index(l, d, k, j)], pts[j * d + k]);
+            }
         }
     }
 }

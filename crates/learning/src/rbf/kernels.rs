@@ -2,10 +2,13 @@
 //! accumulation and the weight update. No allocation, no panics (all slice lengths are
 //! guaranteed by the layer's invariants and re-checked by slicing that cannot fail).
 //!
-//! Layouts: the distance kernel reads a **dimension-major** copy of the centres
-//! (`centres_t[k * stride + i]` is coordinate `k` of node `i`, `stride` a multiple of
-//! [`BLOCK`]) so that `BLOCK` nodes are processed side by side in vector registers; weights
-//! are node-major rows of `n` values.
+//! Layouts: the distance kernel reads a **block-major** copy of the centres: node `i` lies in
+//! block `i / BLOCK`, each block holds its `BLOCK` nodes dimension-major (`d * BLOCK`
+//! values, coordinate `k` of the block's nodes side by side), and the blocks follow each
+//! other ([`centre_slot`]). `BLOCK` nodes are then processed side by side in vector
+//! registers while the whole copy is read as one sequential stream, which the hardware
+//! prefetchers follow (a plain dimension-major copy reads `d` streams a node stride apart).
+//! Weights are node-major rows of `n` values.
 //!
 //! Every kernel has one generic body (`*_impl::<FMA>`) compiled twice: for the baseline
 //! target, and (on x86-64) inside a `#[target_feature(enable = "avx2,fma")]` wrapper selected
@@ -24,6 +27,13 @@ const BLOCK_AVX2: usize = 32;
 /// `capacity` rounded up to a multiple of [`BLOCK`].
 pub(crate) fn padded(capacity: usize) -> usize {
     capacity.div_ceil(BLOCK) * BLOCK
+}
+
+/// Position of coordinate `k` of node `i` in the block-major centre copy of a layer with
+/// input dimension `dim` (see the module docs).
+#[inline(always)]
+pub(crate) fn centre_slot(dim: usize, k: usize, i: usize) -> usize {
+    (i / BLOCK) * dim * BLOCK + k * BLOCK + i % BLOCK
 }
 
 /// Instruction set used by the kernels, detected once at layer construction.
@@ -165,17 +175,17 @@ fn gaussians_impl<const FMA: bool>(
     }
 }
 
-/// Squared distances from `z` to the `B` nodes `start..start + B` of the dimension-major
-/// centres.
+/// Squared distances from `z` to the `B` nodes `start..start + B` of the block-major
+/// centres (`B` divides [`BLOCK`] and `start` is a multiple of `B`, so the nodes lie in one
+/// block).
 #[inline(always)]
 fn block_sq_dist<const FMA: bool, const B: usize>(
     z: &[f64],
     centres_t: &[f64],
-    stride: usize,
     start: usize,
 ) -> [f64; B] {
     let mut acc = [0.0f64; B];
-    let mut base = start;
+    let mut base = centre_slot(z.len(), 0, start);
     for &zk in z {
         if let Some(block) = centres_t.get(base..base + B) {
             for j in 0..B {
@@ -183,7 +193,7 @@ fn block_sq_dist<const FMA: bool, const B: usize>(
                 acc[j] = fmadd::<FMA>(t, t, acc[j]);
             }
         }
-        base += stride;
+        base += BLOCK;
     }
     acc
 }
@@ -195,10 +205,8 @@ fn block_sq_dist<const FMA: bool, const B: usize>(
 /// Centres and widths of the active nodes as the kernels read them.
 #[derive(Clone, Copy)]
 pub(crate) struct Nodes<'a> {
-    /// Dimension-major centres, `d * stride` values.
+    /// Block-major centres ([`centre_slot`]), `d * padded(len)` values or more.
     pub centres_t: &'a [f64],
-    /// Stride of `centres_t` (multiple of `BLOCK`, at least `len`).
-    pub stride: usize,
     /// Active node count.
     pub len: usize,
     /// `1 / eta_i^2`, at least `len` values.
@@ -227,12 +235,7 @@ fn sq_dists_impl<const FMA: bool, const B: usize>(
 ) {
     let blocks = nodes.len.div_ceil(B);
     for (b, out) in dist_sq.chunks_exact_mut(B).take(blocks).enumerate() {
-        out.copy_from_slice(&block_sq_dist::<FMA, B>(
-            z,
-            nodes.centres_t,
-            nodes.stride,
-            b * B,
-        ));
+        out.copy_from_slice(&block_sq_dist::<FMA, B>(z, nodes.centres_t, b * B));
     }
 }
 
@@ -495,7 +498,7 @@ fn predict_impl<const FMA: bool, const B: usize>(
     for b in 0..blocks {
         let start = b * B;
         let m = B.min(nodes.len - start);
-        let d2 = block_sq_dist::<FMA, B>(z, nodes.centres_t, nodes.stride, start);
+        let d2 = block_sq_dist::<FMA, B>(z, nodes.centres_t, start);
         let mut act = [0.0f64; B];
         let inv = &nodes.inv_width_sq[start..start + m];
         gaussians_impl::<FMA>(&d2[..m], inv, nodes.cutoff, &mut act[..m]);
@@ -533,7 +536,6 @@ mod tests {
         let inv = [1.0; BLOCK];
         let nodes = Nodes {
             centres_t: &centres_t,
-            stride: BLOCK,
             len: 1,
             inv_width_sq: &inv,
             cutoff: MAX_EXPONENT,

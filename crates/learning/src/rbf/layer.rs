@@ -3,7 +3,7 @@
 use std::cmp::Ordering;
 
 use super::config::{GrowthParams, Integrator, RbfLayerConfig};
-use super::kernels::{self, gaussian, padded, sq_dist, Isa, Nodes, MAX_EXPONENT};
+use super::kernels::{self, centre_slot, gaussian, padded, sq_dist, Isa, Nodes, MAX_EXPONENT};
 use super::{RbfConfigError, RbfError};
 
 /// Run-time options of a layer that do not describe its initial centres (see
@@ -164,10 +164,9 @@ pub struct GaussianRbfLayer {
     growth: Option<GrowthParams>,
     /// `capacity * dim`, node-major (the public layout).
     centres: Vec<f64>,
-    /// The same centres dimension-major, `dim * stride` (for the distance kernel).
+    /// The same centres block-major (`kernels::centre_slot`, `dim * padded(capacity)`
+    /// values), for the distance kernel.
     centres_t: Vec<f64>,
-    /// `padded(capacity)`: stride of `centres_t`, length of `dist_sq` and `scratch_sq`.
-    stride: usize,
     widths: Vec<f64>,
     inv_width_sq: Vec<f64>,
     /// `capacity * outputs`, node-major (row `i` is `W_i`).
@@ -283,7 +282,7 @@ impl GaussianRbfLayer {
         let mut centres_t = vec![0.0; total(dim)?];
         for (i, u) in centres.chunks_exact(dim).enumerate() {
             for (k, &x) in u.iter().enumerate() {
-                centres_t[k * stride + i] = x;
+                centres_t[centre_slot(dim, k, i)] = x;
             }
         }
         let weights = vec![0.0; total(outputs)?];
@@ -308,7 +307,6 @@ impl GaussianRbfLayer {
             growth: options.growth,
             centres: c,
             centres_t,
-            stride,
             widths,
             inv_width_sq,
             weights,
@@ -527,7 +525,6 @@ impl GaussianRbfLayer {
         self.last_input.copy_from_slice(z);
         let nodes = Nodes {
             centres_t: &self.centres_t,
-            stride: self.stride,
             len: self.len,
             inv_width_sq: &self.inv_width_sq,
             cutoff: self.exponent_cutoff,
@@ -575,7 +572,6 @@ impl GaussianRbfLayer {
     fn nodes(&self) -> Nodes<'_> {
         Nodes {
             centres_t: &self.centres_t,
-            stride: self.stride,
             len: self.len,
             inv_width_sq: &self.inv_width_sq,
             cutoff: self.exponent_cutoff,
@@ -769,8 +765,8 @@ impl GaussianRbfLayer {
             }
             if kept != i {
                 self.centres.copy_within(i * d..(i + 1) * d, kept * d);
-                for row in self.centres_t.chunks_exact_mut(self.stride) {
-                    row[kept] = row[i];
+                for k in 0..d {
+                    self.centres_t[centre_slot(d, k, kept)] = self.centres_t[centre_slot(d, k, i)];
                 }
                 self.weights.copy_within(i * n..(i + 1) * n, kept * n);
                 self.widths[kept] = self.widths[i];
@@ -819,12 +815,8 @@ impl GaussianRbfLayer {
     fn push_prepared(&mut self, width: f64) {
         let (i, d, n) = (self.len, self.dim, self.outputs);
         let inv = inverse_width_sq(width).unwrap_or(1.0);
-        for (row, &x) in self
-            .centres_t
-            .chunks_exact_mut(self.stride)
-            .zip(&self.centres[i * d..(i + 1) * d])
-        {
-            row[i] = x;
+        for (k, &x) in self.centres[i * d..(i + 1) * d].iter().enumerate() {
+            self.centres_t[centre_slot(d, k, i)] = x;
         }
         self.widths[i] = width;
         self.inv_width_sq[i] = inv;
@@ -864,7 +856,6 @@ impl GaussianRbfLayer {
         self.check_input(z)?;
         let nodes = Nodes {
             centres_t: &self.centres_t,
-            stride: self.stride,
             len: self.len,
             inv_width_sq: &self.inv_width_sq,
             cutoff: self.exponent_cutoff,
