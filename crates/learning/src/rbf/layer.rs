@@ -714,7 +714,10 @@ impl GaussianRbfLayer {
             .iter_mut()
             .zip(&self.activations[..len])
         {
-            *r = r.max(s);
+            // Activations are never NaN (the Gaussian maps NaN to 0), so the plain
+            // comparison is `max`; unlike `f64::max` (NaN rules) or a conditional store it
+            // compiles to vector max instructions.
+            *r = if s > *r { s } else { *r };
         }
         self.tracked_steps = self.tracked_steps.saturating_add(1);
         self.window_fill += 1;
