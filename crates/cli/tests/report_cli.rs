@@ -25,14 +25,13 @@ fn admittance(args: &[&str]) -> (i32, String, String) {
     )
 }
 
-fn tempdir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "admittance-report-cli-{tag}-{}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh folder under the system's temporary directory, removed with everything in it
+/// when the returned guard drops (also when the test fails).
+fn tempdir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("admittance-report-cli-{tag}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Runs the deadzone scenario for 3 s into `dir/run`.
@@ -84,8 +83,9 @@ fn check_csv(path: &Path) -> (Vec<String>, usize) {
 
 #[test]
 fn run_writes_every_output_and_report_regenerates_them() {
-    let dir = tempdir("full");
-    let out = short_run(&dir);
+    let tmp = tempdir("full");
+    let dir = tmp.path();
+    let out = short_run(dir);
 
     // summary.json
     let summary: serde_json::Value =
@@ -277,7 +277,6 @@ fn run_writes_every_output_and_report_regenerates_them() {
     assert!(err.contains("pd.csv") && err.contains("missing"), "{err}");
     let (code, _, err) = admittance(&["report", dir.join("nowhere").to_str().unwrap()]);
     assert_eq!(code, 3, "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -297,7 +296,8 @@ fn list_shows_every_scenario_with_its_description() {
         .expect("deadzone listed");
     assert!(deadzone.contains("Experiment A"), "{deadzone}");
 
-    let dir = tempdir("list");
+    let tmp = tempdir("list");
+    let dir = tmp.path();
     std::fs::write(
         dir.join("ok.toml"),
         "name = \"x\"\ndescription = \"a test\"\n",
@@ -311,5 +311,4 @@ fn list_shows_every_scenario_with_its_description() {
         err.contains("bad.toml") && err.trim_end().lines().count() == 1,
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -75,17 +75,20 @@ fn run(dir: &Path, text: &str) -> (i32, String, String) {
     )
 }
 
-fn tempdir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("admittance-run-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh folder under the system's temporary directory, removed with everything in it
+/// when the returned guard drops (also when the test fails).
+fn tempdir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("admittance-run-cli-{tag}-"))
+        .tempdir()
+        .unwrap()
 }
 
 #[test]
 fn a_valid_scenario_writes_a_complete_folder() {
-    let dir = tempdir("ok");
-    let (code, _, stderr) = run(&dir, &scenario());
+    let tmp = tempdir("ok");
+    let dir = tmp.path();
+    let (code, _, stderr) = run(dir, &scenario());
     assert_eq!(code, 0, "{stderr}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
@@ -98,7 +101,7 @@ fn a_valid_scenario_writes_a_complete_folder() {
     assert!(csv.lines().next().unwrap().starts_with("t,q_d.left_s0"));
     assert!(csv.lines().count() > 10);
     assert!(dir.join("out/report.md").exists());
-    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
         .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
@@ -151,8 +154,9 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
         ("bad TOML", good.replace("[plant]", "[plant"), ""),
     ];
     for (what, text, key) in cases {
-        let dir = tempdir(&what.replace(' ', "_").replace(['(', ')', ','], ""));
-        let (code, stdout, stderr) = run(&dir, &text);
+        let tmp = tempdir(&what.replace(' ', "_").replace(['(', ')', ','], ""));
+        let dir = tmp.path();
+        let (code, stdout, stderr) = run(dir, &text);
         assert_eq!(code, 3, "{what}: exit {code}, stderr {stderr}");
         assert!(stdout.is_empty(), "{what}: {stdout}");
         let line = stderr.trim_end();
@@ -169,7 +173,7 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
             !dir.join("out").exists(),
             "{what}: an output folder was left"
         );
-        let leftovers = std::fs::read_dir(&dir)
+        let leftovers = std::fs::read_dir(dir)
             .unwrap()
             .filter_map(|e| e.ok())
             .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
