@@ -48,8 +48,8 @@ pub(crate) fn subsample_standardised(
 }
 
 /// k-means++ seeding: chooses `count` new centres from the `m` candidate points `pts_t`
-/// (block-major, `kernels::block_major_index`), given `existing` centres (row-major, may be empty: then the
-/// first centre is uniform). Returns the new centres row-major (count x dim).
+/// (block-major, `kernels::block_major_index`), given `existing` centres (row-major, may
+/// be empty: then the first centre is uniform). Returns the new centres row-major (count x dim).
 ///
 /// When every candidate coincides with a centre already chosen (fewer distinct points
 /// than nodes), further centres are drawn uniformly (duplicates; the ridge term keeps
