@@ -34,7 +34,7 @@
 //! * **Integration** (METHOD.md section 3): exact solution of the update law over a step
 //!   with `S(Z)` and `e` held (default), or explicit Euler.
 //! * **Cut-off**: activations below `min_activation` (default `1e-16`) are exactly zero.
-//! * **Speed**: the distance kernel reads a dimension-major copy of the centres and handles
+//! * **Speed**: the distance kernel reads a block-major copy of the centres and handles
 //!   32 nodes at a time; `exp` is a branch-free polynomial evaluated 16 lanes at a time
 //!   (relative error below `1e-15` against `f64::exp`); outputs and weight updates are
 //!   specialised for 1 to 8 outputs. The kernels are compiled for the baseline target and

@@ -76,7 +76,7 @@ pub(crate) struct FeatureMap {
     pub(crate) standardiser: Standardiser,
     pub(crate) friction: FrictionFeatures,
     pub(crate) nodes: NodeSet,
-    /// Centres transposed, dim x L (node index fastest), for the one-sample path.
+    /// Centres block-major (`kernels::block_major_index`), for the one-sample path.
     centres_t: Vec<f64>,
     /// ||u_j||^2.
     un: Vec<f64>,
