@@ -10,6 +10,8 @@
 //! * [`config`]: configuration dicts with the scenario files' keys; [`convert`]: arrays
 //!   and errors.
 
+#![warn(missing_docs)]
+
 mod admittance;
 mod config;
 mod control;
