@@ -12,7 +12,7 @@ use std::time::Instant;
 use admittance_learning::broad::{
     fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec,
 };
-use admittance_sim::FreeMotionData;
+use admittance_scenario::FreeMotionData;
 use clap::Args;
 
 use crate::progress::{self, Spinner};
@@ -99,12 +99,13 @@ fn load_split(
         )));
     }
     // `[q, qdot, qddot]` and `tau`, row-major, conditioned as at run time.
-    let (x, y) = admittance_sim::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
-        CliError::usage(format!(
-            "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
-            path.display()
-        ))
-    })?;
+    let (x, y) =
+        admittance_scenario::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
+            CliError::usage(format!(
+                "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
+                path.display()
+            ))
+        })?;
     Ok((data, x, y, train_rows))
 }
 

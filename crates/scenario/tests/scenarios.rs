@@ -10,8 +10,7 @@ mod common;
 use common::{number, per_joint, scenario_path};
 use std::path::PathBuf;
 
-use admittance_sim::scenario::{run_variant, RunOptions, ScenarioSource, VariantRun};
-use serde_json::Value;
+use admittance_scenario::{run_variant, RunOptions, ScenarioSource, VariantRun};
 
 fn load(name: &str, overrides: &[&str]) -> (ScenarioSource, PathBuf) {
     let path = scenario_path(name);
@@ -95,22 +94,13 @@ fn deadzone_scenario_runs_every_variant() {
         let run = run_variant(&source, &path, Some(name), &options)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         check_common(&run);
-        let weights = run
-            .metrics
-            .get("weight_norm_final")
-            .and_then(Value::as_object);
-        let nodes = run
-            .metrics
-            .get("nodes")
-            .and_then(Value::as_object)
-            .expect("nodes");
+        let weights = run.metrics.weight_norm_final.as_ref();
+        let nodes = &run.metrics.nodes;
         match name.as_str() {
             "pd" => assert!(nodes.is_empty(), "pd has no networks"),
             n if n.starts_with("nn_") => {
                 let weights = weights.expect("weight norms of the neural variants");
-                assert!(weights
-                    .values()
-                    .all(|w| w.as_f64().is_some_and(f64::is_finite)));
+                assert!(weights.values().all(|w| w.is_finite()));
                 let compensated = !n.contains("uncompensated");
                 assert_eq!(
                     nodes.contains_key("deadzone"),
@@ -186,13 +176,10 @@ fn dynamic_nodes_scenario_discards_and_grows() {
     let added = number(&run, "nodes_added");
     assert!(discarded > 0.0, "no node discarded");
     assert!(added > 0.0, "no node added");
-    let nodes = run.metrics["nodes"]["f"].as_f64().expect("f node count");
+    let nodes = run.metrics.nodes["f"] as f64;
     assert_eq!(nodes, 512.0 - discarded + added, "node bookkeeping");
     assert!(
-        !run.metrics["nodes"]
-            .as_object()
-            .unwrap()
-            .contains_key("deadzone"),
+        !run.metrics.nodes.contains_key("deadzone"),
         "C runs without the deadzone network"
     );
     for key in [
@@ -233,11 +220,9 @@ fn deadzone_one_hour_stays_bounded() {
     )
     .expect("runs");
     check_common(&run);
-    let weights = run.metrics["weight_norm_final"]
-        .as_object()
-        .expect("weight norms");
+    let weights = run.metrics.weight_norm_final.clone().expect("weight norms");
     for (net, w) in weights {
-        let w = w.as_f64().expect("number");
+        let w: f64 = w;
         assert!(w.is_finite() && w < 1e3, "network {net}: weight norm {w}");
     }
     assert!(

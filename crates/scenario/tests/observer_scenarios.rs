@@ -9,8 +9,8 @@ mod common;
 
 use common::{number, per_joint, scenario_path};
 
-use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
-use admittance_sim::FreeMotionData;
+use admittance_scenario::FreeMotionData;
+use admittance_scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
 
 #[test]
 fn admittance_scenario_momentum_and_oracle() {
@@ -81,6 +81,7 @@ fn free_motion_scenario_writes_a_loadable_file() {
         None,
         &["duration=1.5".to_string()],
         &RunOptions::default(),
+        false,
         |_, _, _| {},
         |_| Ok(()),
     )

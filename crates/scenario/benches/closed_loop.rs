@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use admittance_control::{ControlInput, Controller, NeuralController};
 use admittance_dynamics::Model;
-use admittance_sim::scenario::{run_variant, RunOptions, Scenario, ScenarioSource};
+use admittance_scenario::{run_variant, RunOptions, Scenario, ScenarioSource};
 use admittance_sim::{Plant, Sensors};
 use criterion::{criterion_group, criterion_main, Criterion};
 

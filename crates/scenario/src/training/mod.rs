@@ -18,10 +18,21 @@ use admittance_learning::broad::{
 };
 use serde_json::{json, Value};
 
-use super::runner::{run_variant, RunOptions, Stage};
-use super::source::{ScenarioError, ScenarioSource};
-use super::spec::{ObserverKind, Scenario, TrainingSpec};
+use crate::error::ScenarioError;
+use crate::progress::{Progress, ProgressFn, RunOptions, Stage};
+use crate::series::TimeSeries;
+use crate::source::ScenarioSource;
+use crate::spec::{ObserverKind, Scenario, TrainingSpec};
 use crate::FreeMotionData;
+
+/// Runs a data scenario (its source and file) and returns its joints and its free-motion
+/// recording: the runner, passed in so that training does not depend on it.
+pub(crate) type SimulateData<'a> =
+    &'a dyn Fn(
+        &ScenarioSource,
+        &Path,
+        &RunOptions,
+    ) -> Result<(Vec<String>, Option<TimeSeries>), ScenarioError>;
 
 /// Version of the cache entries (bump when what a key stands for changes).
 const CACHE_FORMAT_VERSION: u32 = 1;
@@ -49,7 +60,7 @@ pub struct TrainedNetwork {
     /// [`VALIDATION_DECIMATION`]-th sample: columns `t`, `target.JOINT` (what the network
     /// learns: the torque for `learned`, the nominal model's residual for `hybrid`) and
     /// `prediction.JOINT`.
-    pub validation_series: Option<super::runner::TimeSeries>,
+    pub validation_series: Option<TimeSeries>,
 }
 
 /// Decimation of [`TrainedNetwork::validation_series`].
@@ -61,7 +72,7 @@ fn validation_series(
     x: &[f64],
     y: &[f64],
     joints: &[String],
-) -> Option<super::runner::TimeSeries> {
+) -> Option<TimeSeries> {
     let n = joints.len();
     let mut columns = vec!["t".to_string()];
     columns.extend(joints.iter().map(|j| format!("target.{j}")));
@@ -79,7 +90,7 @@ fn validation_series(
         row.extend_from_slice(&out);
         rows.push(row);
     }
-    Some(super::runner::TimeSeries { columns, rows })
+    Some(TimeSeries { columns, rows })
 }
 
 /// Free-motion data simulated in this process, by identity (a run with several learned
@@ -172,6 +183,7 @@ fn simulated_data(
     ctx: &Ctx<'_>,
     data: &DataSource,
     options: &RunOptions,
+    simulate: SimulateData<'_>,
 ) -> Result<Arc<FreeMotionData>, ScenarioError> {
     if let Ok(memo) = SIMULATED.lock() {
         if let Some((_, d)) = memo.iter().find(|(id, _)| *id == data.identity) {
@@ -193,9 +205,10 @@ fn simulated_data(
     let outer = options.progress.clone();
     let nested = RunOptions {
         seed: None,
-        progress: outer.map(|p| -> super::runner::ProgressFn {
-            Arc::new(move |e: super::runner::Progress<'_>| {
-                p(super::runner::Progress {
+        limits: options.limits,
+        progress: outer.map(|p| -> ProgressFn {
+            Arc::new(move |e: Progress<'_>| {
+                p(Progress {
                     variant: &variant_label,
                     stage: Stage::TrainingData,
                     ..e
@@ -203,17 +216,17 @@ fn simulated_data(
             })
         }),
     };
-    let run = run_variant(&source, &data.path, None, &nested)?;
-    let Some(series) = run.free_motion else {
+    let (joints, free_motion) = simulate(&source, &data.path, &nested)?;
+    let Some(series) = free_motion else {
         return Err(ctx.err(
             data.key,
             format!("{} does not record free-motion data", data.path.display()),
             Some("add [record] free_motion_csv = true to that scenario"),
         ));
     };
-    let n = run.joints.len();
+    let n = joints.len();
     let mut out = FreeMotionData {
-        joints: run.joints.clone(),
+        joints,
         t: Vec::with_capacity(series.rows.len()),
         q: Vec::with_capacity(series.rows.len() * n),
         qdot: Vec::with_capacity(series.rows.len() * n),
@@ -243,9 +256,10 @@ fn load_data(
     ctx: &Ctx<'_>,
     data: &DataSource,
     options: &RunOptions,
+    simulate: SimulateData<'_>,
 ) -> Result<Arc<FreeMotionData>, ScenarioError> {
     if data.simulated {
-        simulated_data(ctx, data, options)
+        simulated_data(ctx, data, options, simulate)
     } else {
         FreeMotionData::load(&data.path)
             .map(Arc::new)
@@ -274,13 +288,14 @@ fn arrays(
         ));
     }
     let n = data.dof();
-    let (x, mut y) = crate::observer_training_arrays(data, input_filter_hz).map_err(|e| {
-        ctx.err(
-            "observer.input_filter_hz",
-            format!("with the data of {key}: {e}"),
-            None,
-        )
-    })?;
+    let (x, mut y) =
+        crate::free_motion::observer_training_arrays(data, input_filter_hz).map_err(|e| {
+            ctx.err(
+                "observer.input_filter_hz",
+                format!("with the data of {key}: {e}"),
+                None,
+            )
+        })?;
     if let Some(model) = nominal {
         let mut d = Data::new(model);
         for k in 0..data.len() {
@@ -312,6 +327,7 @@ pub(crate) fn observer_network(
     arm_joints: &[String],
     nominal: Option<&Model>,
     options: &RunOptions,
+    simulate: SimulateData<'_>,
 ) -> Result<TrainedNetwork, ScenarioError> {
     let ctx = Ctx { source, variant };
     let Some(spec) = scenario.observer.training.as_ref() else {
@@ -374,7 +390,7 @@ pub(crate) fn observer_network(
     let model_path = dir.join(format!("{stem}.broad"));
     let meta_path = dir.join(format!("{stem}.json"));
     let filter = scenario.observer.input_filter_hz;
-    let validation = load_data(&ctx, &val_src, options)?;
+    let validation = load_data(&ctx, &val_src, options, simulate)?;
     let (xv, yv) = arrays(&ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
     if spec.cache {
         if let Some(mut hit) = read_cache(&model_path, &meta_path, &key_text) {
@@ -385,7 +401,7 @@ pub(crate) fn observer_network(
     }
 
     let label = variant.unwrap_or("base");
-    let train = load_data(&ctx, &train_src, options)?;
+    let train = load_data(&ctx, &train_src, options, simulate)?;
     let (x, y) = arrays(&ctx, &train, train_src.key, arm_joints, nominal, filter)?;
     let learn_err = |e: admittance_learning::broad::BroadError| {
         ctx.err("observer.training", e.to_string(), None)

@@ -9,7 +9,7 @@ mod common;
 use common::{number, per_joint, scenario_path};
 use std::path::{Path, PathBuf};
 
-use admittance_sim::scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
+use admittance_scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
 use serde_json::Value;
 
 /// Records a data scenario, shortened to `seconds`, into `dir/free_motion.csv`.
@@ -20,6 +20,7 @@ fn record(name: &str, seconds: f64, dir: &Path) -> PathBuf {
         None,
         &[format!("duration={seconds}")],
         &RunOptions::default(),
+        false,
         |_, _, _| {},
         |_| Ok(()),
     )
@@ -71,7 +72,10 @@ fn learned_variants_train_validate_cache_and_estimate() {
         assert_eq!(number(r, "observer_nodes"), 150.0, "{}", r.name);
         assert!(number(r, "train_seconds") > 0.0, "{}", r.name);
         assert_eq!(number(r, "training_samples"), 40_000.0, "{}", r.name);
-        assert_eq!(r.metrics["observer_model_cached"], Value::Bool(false));
+        assert_eq!(
+            common::metric(&r, "observer_model_cached"),
+            Value::Bool(false)
+        );
         let v = per_joint(r, "validation_nrmse");
         assert_eq!(v.len(), 7);
         // The network on the validation data (Fig 15): 12 s at 1 kHz, every 10th sample.
@@ -105,7 +109,10 @@ fn learned_variants_train_validate_cache_and_estimate() {
 
     // A second run loads the cached network and reproduces the first exactly.
     let again = run("learned");
-    assert_eq!(again.metrics["observer_model_cached"], Value::Bool(true));
+    assert_eq!(
+        common::metric(&again, "observer_model_cached"),
+        Value::Bool(true)
+    );
     assert_eq!(
         number(&again, "external_torque_nrmse"),
         number(&learned, "external_torque_nrmse")
@@ -134,7 +141,7 @@ fn learned_variants_train_validate_cache_and_estimate() {
     }
     let retrained = run("learned");
     assert_eq!(
-        retrained.metrics["observer_model_cached"],
+        common::metric(&retrained, "observer_model_cached"),
         Value::Bool(false)
     );
     let (a, b) = (
@@ -152,7 +159,10 @@ fn learned_variants_train_validate_cache_and_estimate() {
         .concat(),
     );
     let other = run_variant(&source2, &path, Some("learned"), &options).unwrap();
-    assert_eq!(other.metrics["observer_model_cached"], Value::Bool(false));
+    assert_eq!(
+        common::metric(&other, "observer_model_cached"),
+        Value::Bool(false)
+    );
     assert_eq!(number(&other, "observer_nodes"), 120.0);
     let _ = std::fs::remove_dir_all(&root);
 }

@@ -1,0 +1,65 @@
+//! Time-series columns (docs/outputs.md, "Time-series columns"). A per-joint column is
+//! named `PREFIX.JOINT`, e.g. `q.left_s0`.
+
+/// Time (s), the first column of every series.
+pub const TIME: &str = "t";
+
+/// The per-joint signals of `VARIANT.csv`, in the order they are written.
+pub const PER_JOINT: [&str; 9] = [
+    DESIRED,
+    REFERENCE,
+    POSITION,
+    VELOCITY,
+    MEASURED_POSITION,
+    COMMAND,
+    APPLIED,
+    EXTERNAL,
+    EXTERNAL_ESTIMATE,
+];
+
+/// Desired trajectory `q_d` (rad).
+pub const DESIRED: &str = "q_d";
+/// Compliant reference `q_r` (rad).
+pub const REFERENCE: &str = "q_r";
+/// The plant's true angle (rad).
+pub const POSITION: &str = "q";
+/// The plant's true velocity (rad/s).
+pub const VELOCITY: &str = "qdot";
+/// What the encoder reported (rad).
+pub const MEASURED_POSITION: &str = "q_meas";
+/// The controller's command (N m).
+pub const COMMAND: &str = "tau_cmd";
+/// The torque the actuator applied (N m).
+pub const APPLIED: &str = "tau_applied";
+/// The true external torque (N m).
+pub const EXTERNAL: &str = "tau_ext";
+/// The estimate that drove the admittance model (N m).
+pub const EXTERNAL_ESTIMATE: &str = "tau_ext_hat";
+/// Hand position error (m), one column.
+pub const HAND_ERROR: &str = "ee_error";
+/// With dynamic nodes: `f` of the true arm (N m), per joint.
+pub const F_TRUE: &str = "f";
+/// With dynamic nodes: the network's `f_hat` (N m), per joint.
+pub const F_ESTIMATE: &str = "f_hat";
+/// With the neural controller: node count of the f network, one column.
+pub const NODES_F: &str = "nodes.f";
+
+/// The per-joint signals of free-motion data (`free_motion.csv`), in the order written.
+pub const FREE_MOTION: [&str; 4] = ["q", "qdot", "qddot", "tau"];
+
+/// Validation series: what the network learns, per joint.
+pub const VALIDATION_TARGET: &str = "target";
+/// Validation series: the network's output, per joint.
+pub const VALIDATION_PREDICTION: &str = "prediction";
+/// Node-weight series: prefix of a node's column (`w.ID`).
+pub const NODE_WEIGHT_PREFIX: &str = "w.";
+
+/// `PREFIX.JOINT`.
+pub fn joint(prefix: &str, joint: &str) -> String {
+    format!("{prefix}.{joint}")
+}
+
+/// `PREFIX.JOINT` for every joint, in order.
+pub fn per_joint<'a>(prefix: &'a str, joints: &'a [String]) -> impl Iterator<Item = String> + 'a {
+    joints.iter().map(move |j| joint(prefix, j))
+}

@@ -1,0 +1,212 @@
+//! Checks of a resolved scenario that serde cannot make: signs, ranges, names, and the
+//! combinations of sections.
+
+use super::{ControllerKind, Scenario};
+use crate::error::Invalid;
+
+impl Scenario {
+    /// Checks what serde cannot: signs, ranges, names. `joints` are the model's joint names.
+    pub fn validate(&self, joints: &[String]) -> Vec<Invalid> {
+        let mut out = Vec::new();
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            out.push(Invalid::new(
+                "duration",
+                format!("is {}, must be > 0 s", self.duration),
+            ));
+        }
+        if !(self.evaluation_start >= 0.0 && self.evaluation_start < self.duration) {
+            out.push(
+                Invalid::new(
+                    "evaluation_start",
+                    format!("is {}, must be in [0, duration)", self.evaluation_start),
+                )
+                .hint("metrics are computed over [evaluation_start, duration]"),
+            );
+        }
+        if self.trajectory.offset.len() != joints.len() {
+            out.push(
+                Invalid::new(
+                    "trajectory.offset",
+                    format!(
+                        "has {} values, the arm has {} joints",
+                        self.trajectory.offset.len(),
+                        joints.len()
+                    ),
+                )
+                .hint(format!("one value per joint: {}", joints.join(", "))),
+            );
+        }
+        if self.trajectory.offset.iter().any(|v| !v.is_finite()) {
+            out.push(Invalid::new("trajectory.offset", "must be finite"));
+        }
+        for (k, s) in self.trajectory.sines.iter().enumerate() {
+            let key = format!("trajectory.sines.{k}");
+            if !joints.contains(&s.joint) {
+                out.push(
+                    Invalid::new(
+                        format!("{key}.joint"),
+                        format!("unknown joint '{}'", s.joint),
+                    )
+                    .hint(format!("joints of this arm: {}", joints.join(", "))),
+                );
+            }
+            if !(s.period.is_finite() && s.period > 0.0) {
+                out.push(Invalid::new(
+                    format!("{key}.period"),
+                    format!("is {}, must be > 0 s", s.period),
+                ));
+            }
+            if !s.amplitude.is_finite() || !s.phase.is_finite() {
+                out.push(Invalid::new(
+                    key.clone(),
+                    "amplitude and phase must be finite",
+                ));
+            }
+        }
+        match self.controller.kind {
+            ControllerKind::Pd if self.controller.pd.is_none() => out.push(
+                Invalid::new(
+                    "controller.pd",
+                    "kind = \"pd\" needs a [controller.pd] table",
+                )
+                .hint("give kp and kd"),
+            ),
+            ControllerKind::ComputedTorque if self.controller.computed_torque.is_none() => out
+                .push(Invalid::new(
+                    "controller.computed_torque",
+                    "kind = \"computed_torque\" needs a [controller.computed_torque] table",
+                )),
+            _ => {}
+        }
+        if let Some(d) = &self.dynamic_nodes {
+            if self.controller.kind != ControllerKind::Neural {
+                out.push(Invalid::new(
+                    "dynamic_nodes",
+                    "needs controller.kind = \"neural\"",
+                ));
+            }
+            if !(d.discard_time > 0.0
+                && d.discard_time < d.grow_time
+                && d.grow_time < self.duration)
+            {
+                out.push(
+                    Invalid::new(
+                        "dynamic_nodes.grow_time",
+                        "needs 0 < discard_time < grow_time < duration",
+                    )
+                    .hint("discard first, then grow, before the run ends"),
+                );
+            }
+            if !(d.upsilon > 0.0 && d.upsilon < 1.0) {
+                out.push(Invalid::new(
+                    "dynamic_nodes.upsilon",
+                    format!("is {}, must be in (0, 1)", d.upsilon),
+                ));
+            }
+            if !(d.approximation_window > 0.0 && d.approximation_window <= d.discard_time) {
+                out.push(Invalid::new(
+                    "dynamic_nodes.approximation_window",
+                    "must be > 0 and at most discard_time",
+                ));
+            }
+            // Each phase's window must lie inside that phase, or the "after discard" error
+            // would mix in samples from before the discard (and likewise for growth).
+            if d.approximation_window > d.grow_time - d.discard_time
+                || d.approximation_window > self.duration - d.grow_time
+            {
+                out.push(
+                    Invalid::new(
+                        "dynamic_nodes.approximation_window",
+                        format!(
+                            "is {} s, longer than a phase (grow_time - discard_time = {} s, duration - grow_time = {} s)",
+                            d.approximation_window,
+                            d.grow_time - d.discard_time,
+                            self.duration - d.grow_time
+                        ),
+                    )
+                    .hint("each phase's error is measured over the last approximation_window seconds of that phase"),
+                );
+            }
+        }
+        if !(self.observer.nominal_inertia_scale.is_finite()
+            && self.observer.nominal_inertia_scale > 0.0)
+        {
+            out.push(Invalid::new(
+                "observer.nominal_inertia_scale",
+                format!("is {}, must be > 0", self.observer.nominal_inertia_scale),
+            ));
+        }
+        if !(self.observer.cutoff_hz.is_finite() && self.observer.cutoff_hz >= 0.0) {
+            out.push(Invalid::new(
+                "observer.cutoff_hz",
+                format!(
+                    "is {}, must be >= 0 (0: no filter)",
+                    self.observer.cutoff_hz
+                ),
+            ));
+        }
+        if !(self.observer.warmup.is_finite() && self.observer.warmup >= 0.0) {
+            out.push(Invalid::new(
+                "observer.warmup",
+                format!("is {}, must be >= 0 s", self.observer.warmup),
+            ));
+        }
+        let nyquist = 0.5 * self.plant.control_rate_hz;
+        if !(self.observer.input_filter_hz.is_finite()
+            && self.observer.input_filter_hz >= 0.0
+            && self.observer.input_filter_hz < nyquist)
+        {
+            out.push(Invalid::new(
+                "observer.input_filter_hz",
+                format!(
+                    "is {}, must be in [0, {nyquist}) Hz (0: no second filter)",
+                    self.observer.input_filter_hz
+                ),
+            ));
+        }
+        if self.observer.kind.is_learned() {
+            match &self.observer.training {
+                None => out.push(
+                    Invalid::new(
+                        "observer.kind",
+                        "needs an [observer.training] table (the free-motion data to learn from)",
+                    )
+                    .hint("add [observer.training] with data = \"free_motion.toml\" (or a recorded FILE.csv) and validation = ..."),
+                ),
+                Some(t) => {
+                    if t.nodes == 0 {
+                        out.push(Invalid::new("observer.training.nodes", "must be at least 1"));
+                    }
+                    if !(t.width_scale.is_finite() && t.width_scale > 0.0) {
+                        out.push(Invalid::new(
+                            "observer.training.width_scale",
+                            format!("is {}, must be finite and > 0", t.width_scale),
+                        ));
+                    }
+                    if t.width_neighbours == 0 {
+                        out.push(Invalid::new(
+                            "observer.training.width_neighbours",
+                            "must be at least 1",
+                        ));
+                    }
+                    if t.friction_features
+                        && (t.friction_scales.is_empty()
+                            || t.friction_scales.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+                    {
+                        out.push(Invalid::new(
+                            "observer.training.friction_scales",
+                            format!(
+                                "is {:?}, must be a non-empty list of finite values > 0 (rad/s)",
+                                t.friction_scales
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        if self.output.decimation == 0 {
+            out.push(Invalid::new("output.decimation", "must be at least 1"));
+        }
+        out
+    }
+}
