@@ -44,6 +44,20 @@ pub const F_ESTIMATE: &str = "f_hat";
 /// With the neural controller: node count of the f network, one column.
 pub const NODES_F: &str = "nodes.f";
 
+/// Task-space runs (a Cartesian admittance or a hand contact): the true force of the
+/// environment on the hand (N), columns `f_hand.x`, `f_hand.y`, `f_hand.z`.
+pub const HAND_FORCE: &str = "f_hand";
+/// The estimated hand force `J^{+T} tau_ext_hat` (N), `.x .y .z`.
+pub const HAND_FORCE_ESTIMATE: &str = "f_hand_hat";
+/// The true hand position (m, base frame), `.x .y .z`.
+pub const HAND_POSITION: &str = "x_hand";
+/// The hand position of the compliant reference `FK(q_r)` (m), `.x .y .z`.
+pub const HAND_REFERENCE: &str = "x_hand_r";
+/// The desired hand position `FK(q_d)` (m), `.x .y .z`.
+pub const HAND_DESIRED: &str = "x_hand_d";
+/// The axis suffixes of the hand columns.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
 /// The per-joint signals of free-motion data (`free_motion.csv`), in the order written.
 pub const FREE_MOTION: [&str; 4] = ["q", "qdot", "qddot", "tau"];
 

@@ -259,6 +259,10 @@ fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
         json!(runs.first().map(|r| r.joints.clone()).unwrap_or_default()),
     );
     out.insert(summary::KEY_VARIANTS.into(), Value::Object(variants));
+    out.insert(
+        summary::KEY_VARIANT_ORDER.into(),
+        json!(runs.iter().map(|r| r.name.clone()).collect::<Vec<_>>()),
+    );
     Value::Object(out)
 }
 
