@@ -115,6 +115,22 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             message: io.to_string(),
         },
     })?;
+    if !summary.failures.is_empty() {
+        if args.json {
+            crate::write_stdout(&format!(
+                "{}\n",
+                serde_json::to_string_pretty(&summary.json).unwrap_or_default()
+            ));
+        }
+        return Err(CliError {
+            code: 1,
+            message: format!(
+                "the run failed: {}; the run folder {} holds what ran (report.md says where it stopped)",
+                summary.failures.join("; "),
+                summary.out_dir.display()
+            ),
+        });
+    }
     if args.json {
         crate::write_stdout(&format!(
             "{}\n",

@@ -5,6 +5,15 @@ use crate::error::ScenarioError;
 use crate::limits::Limits;
 use crate::spec::Scenario;
 
+/// A number as a person reads it: plain when moderate, in exponent form when huge.
+fn num(x: f64) -> String {
+    if x.is_finite() && x.abs() < 1e6 {
+        format!("{x}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
 fn human_bytes(b: f64) -> String {
     if b >= (1u64 << 30) as f64 {
         format!("{:.3e} GiB", b / (1u64 << 30) as f64)
@@ -22,11 +31,20 @@ pub(crate) fn check_run(
 ) -> Result<(), ScenarioError> {
     let plant_steps = s.duration * s.plant.rate_hz;
     if !(plant_steps <= limits.max_plant_steps) {
+        // Blame the rate when it is the unusual factor.
+        let key = if s.plant.rate_hz > 1e5 {
+            "plant.rate_hz"
+        } else {
+            "duration"
+        };
         return Err(ctx.err(
-            "duration",
+            key,
             format!(
-                "the run needs {plant_steps:.3e} plant steps (duration {} s x plant.rate_hz {} Hz), more than the limit of {:.3e}",
-                s.duration, s.plant.rate_hz, limits.max_plant_steps
+                "the run needs {} plant steps (duration {} s x plant.rate_hz {} Hz), more than the limit of {}",
+                num(plant_steps),
+                num(s.duration),
+                num(s.plant.rate_hz),
+                num(limits.max_plant_steps)
             ),
             Some("shorten `duration` or lower `plant.rate_hz`; the limit is `--max-plant-steps`"),
         ));
@@ -45,8 +63,8 @@ pub(crate) fn check_run(
             format!(
                 "the run would keep {} of time series (duration {} s at {} Hz, a row every {} steps), more than the limit of {}",
                 human_bytes(bytes),
-                s.duration,
-                s.plant.control_rate_hz,
+                num(s.duration),
+                num(s.plant.control_rate_hz),
                 s.output.decimation,
                 human_bytes(limits.max_series_bytes)
             ),

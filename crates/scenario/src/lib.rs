@@ -30,6 +30,7 @@ mod budget;
 mod closed_loop;
 mod error;
 mod free_motion;
+mod health;
 mod limits;
 mod metrics;
 mod progress;
@@ -47,6 +48,7 @@ pub use closed_loop::{
 };
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
+pub use health::Divergence;
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};

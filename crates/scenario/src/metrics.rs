@@ -10,6 +10,16 @@ use serde_json::Value;
 /// Everything `summary.json` says about one variant. Field names are the metric names.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct VariantMetrics {
+    /// Whether the variant diverged (and stopped there).
+    pub diverged: bool,
+    /// When it diverged (s).
+    pub diverged_at: Option<f64>,
+    /// Per joint: share of control steps with the true angle outside its limits.
+    pub q_limit_violation_fraction: Vec<f64>,
+    /// Per joint: share of control steps with the command at the effort limit.
+    pub torque_saturation_fraction: Vec<f64>,
+    /// Per joint: share of control steps with the estimate beyond the effort limit.
+    pub estimate_saturation_fraction: Vec<f64>,
     /// Per joint: RMS of `q_r - q` (rad), evaluation window.
     pub tracking_rmse: Vec<f64>,
     /// Per joint: largest `|q_r - q|` (rad).

@@ -32,6 +32,9 @@ pub struct RunSummary {
     pub variants: Vec<VariantRun>,
     /// The folder written.
     pub out_dir: PathBuf,
+    /// Variants that failed although the folder was written: diverged, or a metric that
+    /// is not finite. A run with failures must not be reported as a success.
+    pub failures: Vec<String>,
 }
 
 /// A failure of a whole run.
@@ -228,12 +231,46 @@ pub fn run_scenario(
         std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
         finish(partial)
     })?;
+    let failures = runs.iter().flat_map(failures).collect();
     Ok(RunSummary {
         scenario: scenario_name,
         json: summary,
         variants: runs,
         out_dir: out_dir.to_path_buf(),
+        failures,
     })
+}
+
+/// What went wrong in a variant: a divergence, or a metric that is not finite (the JSON
+/// `null` of a NaN; `external_torque_nrmse` is `null` by design without contact).
+fn failures(run: &VariantRun) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(d) = &run.divergence {
+        out.push(format!(
+            "variant `{}` diverged at t = {} s: {}",
+            run.name, d.time, d.reason
+        ));
+        return out;
+    }
+    fn finite(v: &Value) -> bool {
+        match v {
+            Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
+            Value::Array(a) => a.iter().all(finite),
+            Value::Object(o) => o.values().all(finite),
+            Value::Null => false,
+            _ => true,
+        }
+    }
+    for (k, v) in run.metrics.to_map() {
+        let may_be_null = matches!(k.as_str(), "external_torque_nrmse" | "diverged_at");
+        if !(finite(&v) || may_be_null && v.is_null()) {
+            out.push(format!(
+                "variant `{}`: metric `{k}` is not finite",
+                run.name
+            ));
+        }
+    }
+    out
 }
 
 /// `summary.json` of a run.

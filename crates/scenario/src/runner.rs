@@ -11,6 +11,7 @@ use admittance_sim::SimError;
 use crate::assemble::{assemble, Assembly, Ctx};
 use crate::closed_loop::{ClosedLoop, LoopInput};
 use crate::error::ScenarioError;
+use crate::health::{Divergence, Health};
 use crate::metrics::{median, rms, DynamicNodeMetrics, JointStats, ObserverStats, VariantMetrics};
 use crate::progress::{RunOptions, Stage};
 use crate::series::{
@@ -38,6 +39,8 @@ pub struct VariantRun {
     pub node_weights: Option<TimeSeries>,
     /// With a learned observer: its network on the validation data.
     pub observer_validation: Option<TimeSeries>,
+    /// Why and when the variant stopped early, if it did.
+    pub divergence: Option<Divergence>,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -155,6 +158,7 @@ fn simulate_variant(
     let weight_stride = ((NODE_WEIGHT_INTERVAL / dt).round() as usize).max(1);
     let variant_name = ctx.variant.unwrap_or("base");
     let progress_stride = (steps / 100).max(1);
+    let mut health = Health::new(plant.model(), &joints, &effort);
 
     for k in 0..steps {
         if k % progress_stride == 0 {
@@ -254,6 +258,14 @@ fn simulate_variant(
         let estimate = closed_loop.external_torque_estimate();
         let q_r = closed_loop.q_r();
         let tau = closed_loop.torque();
+        // A step that left the physical bounds ends the variant before it reaches the
+        // metrics: what they hold is the run up to that point.
+        if health
+            .add(t, plant.q(), plant.qdot(), m, tau, estimate)
+            .is_some()
+        {
+            break;
+        }
         // Hand error by forward kinematics of the true angles against the reference.
         let _ = forward_kinematics(plant.model(), &mut kin_data, q_r);
         let p_ref = kin_data.frame_placements[tip].translation;
@@ -304,7 +316,14 @@ fn simulate_variant(
     }
     options.report(variant_name, Stage::Simulate, steps as u64, steps as u64);
 
+    let [q_limit_violation_fraction, torque_saturation_fraction, estimate_saturation_fraction] =
+        health.fractions_all();
     let mut metrics = VariantMetrics {
+        diverged: health.divergence.is_some(),
+        diverged_at: health.divergence.as_ref().map(|d| d.time),
+        q_limit_violation_fraction,
+        torque_saturation_fraction,
+        estimate_saturation_fraction,
         tracking_rmse: tracking.rms(),
         tracking_max_abs: tracking.max_abs.clone(),
         ee_error_rms: rms(&ee_errors),
@@ -357,5 +376,6 @@ fn simulate_variant(
         free_motion,
         node_weights,
         observer_validation,
+        divergence: health.divergence,
     })
 }
