@@ -1,56 +1,15 @@
 //! The real-time contract: after construction, no controller step, admittance step or
 //! observer update allocates (issue 3, "Bars"), including fault steps, the dynamic-node
-//! hooks (discard, growth) and the 512-node networks on Baxter's 7 joints. A counting
-//! global allocator (per thread) wraps the system one for this test binary.
+//! hooks (discard, growth) and the 512-node networks on Baxter's 7 joints. The counting
+//! allocator of `admittance-testkit` (per thread) wraps the system one for this test binary.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use admittance_control::*;
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use admittance_testkit::count_allocations as count;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-/// Runs `f` and returns how many allocations this thread made meanwhile.
-fn count(f: impl FnOnce()) -> usize {
-    let before = allocations();
-    f();
-    allocations() - before
-}
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 struct Inputs {
     q: Vec<f64>,
