@@ -38,6 +38,8 @@
 //! assert_eq!(nn.node_count(NetworkId::F), 512);
 //! ```
 
+#![warn(missing_docs)]
+
 mod admittance;
 mod baselines;
 mod config;

@@ -1,5 +1,5 @@
 //! The structured deadzone inverse of the neural controller (`deadzone_inverse`, see the
-//! module documentation of `neural.rs`): configuration, projection, reset, and a quick
+//! documentation of `src/neural/deadzone_inverse.rs`): configuration, projection, reset, and a quick
 //! closed-loop check on the 2-joint arm with a deadzone on joint 0.
 
 mod common;
