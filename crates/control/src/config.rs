@@ -1,10 +1,9 @@
 //! Small configuration helpers shared by the controllers.
 
-use std::fmt;
-
-use serde::{de, Deserialize, Deserializer, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::error::ConfigError;
+use crate::number_or_list::{number_or_list, NumberOrList, Shape};
 
 /// A per-joint quantity given either as one value for every joint (`k1 = 12.0`) or as one
 /// value per joint (`k1 = [12.0, 12.0, 8.0]`).
@@ -21,180 +20,20 @@ pub enum JointValues {
     PerJoint(Vec<f64>),
 }
 
-/// What a scenario may give for a per-joint value, as the error messages say it.
-const JOINT_VALUES_EXPECTED: &str =
-    "a number (one value for every joint) or a list of one number per joint";
-
-/// `found ...` for an error message, in the words of a scenario file rather than serde's.
-fn found(unexpected: de::Unexpected<'_>) -> String {
-    use de::Unexpected as U;
-    match unexpected {
-        U::Bool(b) => format!("the boolean {b}"),
-        U::Str(s) => format!("the string {s:?}"),
-        U::Char(c) => format!("the character {c:?}"),
-        U::Bytes(_) => "bytes".to_string(),
-        U::Unit | U::Option => "no value".to_string(),
-        U::Seq => "a list".to_string(),
-        U::Map => "a table".to_string(),
-        other => format!("{other}"),
-    }
-}
-
-struct JointValuesVisitor;
-
-impl<'de> de::Visitor<'de> for JointValuesVisitor {
-    type Value = JointValues;
-
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(JOINT_VALUES_EXPECTED)
-    }
-
-    fn visit_f64<E: de::Error>(self, v: f64) -> Result<JointValues, E> {
-        Ok(JointValues::Uniform(v))
-    }
-    fn visit_i64<E: de::Error>(self, v: i64) -> Result<JointValues, E> {
-        Ok(JointValues::Uniform(v as f64))
-    }
-    fn visit_u64<E: de::Error>(self, v: u64) -> Result<JointValues, E> {
-        Ok(JointValues::Uniform(v as f64))
-    }
-    fn visit_i128<E: de::Error>(self, v: i128) -> Result<JointValues, E> {
-        Ok(JointValues::Uniform(v as f64))
-    }
-    fn visit_u128<E: de::Error>(self, v: u128) -> Result<JointValues, E> {
-        Ok(JointValues::Uniform(v as f64))
-    }
-
-    fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<JointValues, A::Error> {
-        let mut values = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(4096));
-        while let Some(v) = seq.next_element_seed(JointNumber(values.len()))? {
-            values.push(v);
-        }
-        Ok(JointValues::PerJoint(values))
-    }
-
-    fn visit_newtype_struct<D: Deserializer<'de>>(self, d: D) -> Result<JointValues, D::Error> {
-        d.deserialize_any(self)
-    }
-    fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<JointValues, D::Error> {
-        d.deserialize_any(self)
-    }
-
-    fn visit_bool<E: de::Error>(self, v: bool) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Bool(v)))
-    }
-    fn visit_str<E: de::Error>(self, v: &str) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Str(v)))
-    }
-    fn visit_char<E: de::Error>(self, v: char) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Char(v)))
-    }
-    fn visit_bytes<E: de::Error>(self, v: &[u8]) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Bytes(v)))
-    }
-    fn visit_unit<E: de::Error>(self) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Unit))
-    }
-    fn visit_none<E: de::Error>(self) -> Result<JointValues, E> {
-        Err(wrong(de::Unexpected::Option))
-    }
-    fn visit_map<A: de::MapAccess<'de>>(self, _map: A) -> Result<JointValues, A::Error> {
-        Err(wrong(de::Unexpected::Map))
-    }
-    fn visit_enum<A: de::EnumAccess<'de>>(self, _data: A) -> Result<JointValues, A::Error> {
-        Err(wrong(de::Unexpected::Enum))
-    }
-}
-
-fn wrong<E: de::Error>(unexpected: de::Unexpected<'_>) -> E {
-    E::custom(format_args!(
-        "expected {JOINT_VALUES_EXPECTED}, found {}",
-        found(unexpected)
-    ))
-}
-
-/// One element of a per-joint list: a number, or an error naming the joint.
-struct JointNumber(usize);
-
-impl<'de> de::DeserializeSeed<'de> for JointNumber {
-    type Value = f64;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<f64, D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
-impl<'de> de::Visitor<'de> for JointNumber {
-    type Value = f64;
-
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "a number for joint {}", self.0)
-    }
-
-    fn visit_f64<E: de::Error>(self, v: f64) -> Result<f64, E> {
-        Ok(v)
-    }
-    fn visit_i64<E: de::Error>(self, v: i64) -> Result<f64, E> {
-        Ok(v as f64)
-    }
-    fn visit_u64<E: de::Error>(self, v: u64) -> Result<f64, E> {
-        Ok(v as f64)
-    }
-    fn visit_i128<E: de::Error>(self, v: i128) -> Result<f64, E> {
-        Ok(v as f64)
-    }
-    fn visit_u128<E: de::Error>(self, v: u128) -> Result<f64, E> {
-        Ok(v as f64)
-    }
-    fn visit_newtype_struct<D: Deserializer<'de>>(self, d: D) -> Result<f64, D::Error> {
-        d.deserialize_any(self)
-    }
-    fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<f64, D::Error> {
-        d.deserialize_any(self)
-    }
-
-    fn visit_bool<E: de::Error>(self, v: bool) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Bool(v)))
-    }
-    fn visit_str<E: de::Error>(self, v: &str) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Str(v)))
-    }
-    fn visit_char<E: de::Error>(self, v: char) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Char(v)))
-    }
-    fn visit_bytes<E: de::Error>(self, v: &[u8]) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Bytes(v)))
-    }
-    fn visit_unit<E: de::Error>(self) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Unit))
-    }
-    fn visit_none<E: de::Error>(self) -> Result<f64, E> {
-        Err(self.wrong(de::Unexpected::Option))
-    }
-    fn visit_seq<A: de::SeqAccess<'de>>(self, _seq: A) -> Result<f64, A::Error> {
-        Err(self.wrong(de::Unexpected::Seq))
-    }
-    fn visit_map<A: de::MapAccess<'de>>(self, _map: A) -> Result<f64, A::Error> {
-        Err(self.wrong(de::Unexpected::Map))
-    }
-    fn visit_enum<A: de::EnumAccess<'de>>(self, _data: A) -> Result<f64, A::Error> {
-        Err(self.wrong(de::Unexpected::Enum))
-    }
-}
-
-impl JointNumber {
-    fn wrong<E: de::Error>(&self, unexpected: de::Unexpected<'_>) -> E {
-        E::custom(format_args!(
-            "joint {}: expected a number, found {} (a per-joint list holds one number per joint)",
-            self.0,
-            found(unexpected)
-        ))
-    }
-}
+const JOINT_VALUES: Shape = Shape {
+    expected: "a number (one value for every joint) or a list of one number per joint",
+    element: "joint",
+    element_names: &[],
+    hint: "a per-joint list holds one number per joint",
+    length: None,
+};
 
 impl<'de> Deserialize<'de> for JointValues {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        d.deserialize_any(JointValuesVisitor)
+        Ok(match number_or_list(d, &JOINT_VALUES)? {
+            NumberOrList::Number(v) => JointValues::Uniform(v),
+            NumberOrList::List(v) => JointValues::PerJoint(v),
+        })
     }
 }
 
@@ -207,6 +46,66 @@ impl From<f64> for JointValues {
 impl From<Vec<f64>> for JointValues {
     fn from(v: Vec<f64>) -> Self {
         JointValues::PerJoint(v)
+    }
+}
+
+/// A quantity of the three translational or the three rotational task axes (`x`, `y`, `z`
+/// of the base frame), given as one number for all three (`stiffness = 300.0`) or as
+/// `[x, y, z]` (`stiffness = [300.0, 300.0, 0.0]`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum AxisValues {
+    /// The same value on the three axes.
+    Uniform(f64),
+    /// One value per axis, `[x, y, z]`.
+    PerAxis([f64; 3]),
+}
+
+const AXIS_VALUES: Shape = Shape {
+    expected: "a number (one value for x, y and z) or a list of three numbers [x, y, z]",
+    element: "axis",
+    element_names: &["x", "y", "z"],
+    hint: "the list is [x, y, z]",
+    length: Some(3),
+};
+
+impl<'de> Deserialize<'de> for AxisValues {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(match number_or_list(d, &AXIS_VALUES)? {
+            NumberOrList::Number(v) => AxisValues::Uniform(v),
+            NumberOrList::List(v) => AxisValues::PerAxis([v[0], v[1], v[2]]),
+        })
+    }
+}
+
+impl From<f64> for AxisValues {
+    fn from(v: f64) -> Self {
+        AxisValues::Uniform(v)
+    }
+}
+
+impl From<[f64; 3]> for AxisValues {
+    fn from(v: [f64; 3]) -> Self {
+        AxisValues::PerAxis(v)
+    }
+}
+
+impl AxisValues {
+    /// The three values, each checked against `bound`; errors name `key` (and the axis).
+    pub(crate) fn resolve(&self, key: &str, bound: Bound) -> Result<[f64; 3], ConfigError> {
+        match self {
+            AxisValues::Uniform(v) => {
+                let v = bound.check(key, *v)?;
+                Ok([v; 3])
+            }
+            AxisValues::PerAxis(vs) => {
+                let mut out = [0.0; 3];
+                for (i, (o, v)) in out.iter_mut().zip(vs).enumerate() {
+                    *o = bound.check(&format!("{key}[{i}]"), *v)?;
+                }
+                Ok(out)
+            }
+        }
     }
 }
 

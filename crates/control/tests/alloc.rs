@@ -256,6 +256,68 @@ fn no_step_allocates_after_construction() {
         assert_eq!(allocs, 0, "admittance step");
     }
 
+    // The task-space admittance (wrench estimate, admittance, inverse kinematics,
+    // saturation), behind the shared trait too, with faults of every kind and a reset; on
+    // the Baxter arm and on the planar two-joint arm with two task axes.
+    for (model, axes) in [
+        (common::baxter(), TaskAxis::ALL.to_vec()),
+        (common::two_link(), vec![TaskAxis::X, TaskAxis::Z]),
+    ] {
+        let n = model.nq();
+        let cfg = TaskSpaceAdmittanceConfig {
+            task_axes: axes,
+            linear: AxisAdmittanceConfig {
+                inertia: Some(2.0.into()),
+                ..AxisAdmittanceConfig::default_linear()
+            },
+            ..TaskSpaceAdmittanceConfig::default()
+        };
+        let mut task = TaskSpaceAdmittance::new(model, &cfg).unwrap();
+        let mut inp = Inputs::new(n);
+        inp.set(0);
+        fn input(inp: &Inputs) -> TaskSpaceInput<'_> {
+            TaskSpaceInput {
+                q_d: &inp.q_ref,
+                qdot_d: &inp.qdot_ref,
+                qddot_d: &inp.qddot_ref,
+                q: &inp.q,
+                external_torque_estimate: &inp.est,
+            }
+        }
+        let _ = task.step(&input(&inp), 1e-3); // warm-up (not counted)
+        let short = vec![0.0; n - 1];
+        let allocs = count(|| {
+            for k in 1..500 {
+                inp.set(k);
+                inp.est.iter_mut().for_each(|e| *e *= 40.0);
+                match k % 100 {
+                    7 => inp.est[0] = f64::NAN,
+                    8 => inp.q[n - 1] = f64::INFINITY,
+                    9 => inp.qddot_ref[0] = f64::NAN,
+                    _ => {}
+                }
+                let status = task.step(&input(&inp), 1e-3);
+                assert!(status.is_ok() || k % 100 >= 7);
+                let _ = CompliantReference::step_reference(&mut task, &input(&inp), 1e-3);
+                assert!(task.q_r().iter().all(|v| v.is_finite()));
+            }
+            let _ = task.step(
+                &TaskSpaceInput {
+                    q: &short,
+                    ..input(&inp)
+                },
+                1e-3,
+            );
+            let _ = task.step(&input(&inp), -1.0);
+            // The singular pose of the planar arm (and Baxter's stretched pose).
+            inp.q_ref.fill(0.0);
+            inp.q.fill(0.0);
+            let _ = task.step(&input(&inp), 1e-3);
+            task.reset();
+        });
+        assert_eq!(allocs, 0, "task-space admittance step ({n} joints)");
+    }
+
     // Observers.
     let z = vec![0.0; n];
     let obs_in = ObserverInput {
