@@ -96,8 +96,9 @@ pub type TaskSpaceInput<'a> = ReferenceInput<'a>;
 ///
 /// # Faults
 ///
-/// Wrong lengths, a non-finite input, an invalid `dt`, or (not expected) a non-finite result
-/// leave the state unchanged, keep the last `q_r` with zero velocity and acceleration (a
+/// Wrong lengths, a non-finite input, an invalid `dt`, or a result that is not finite
+/// ([`Fault::NonFiniteOutput`]: e.g. an estimate so large that the wrench overflows; `joint`
+/// is 0 when it is the hand's wrench or deviation) leave the state unchanged, keep the last `q_r` with zero velocity and acceleration (a
 /// reference to hold; before the first good step `q_r = q_d` where finite) and return the
 /// fault. `step` neither allocates nor panics.
 #[derive(Clone, Debug)]
@@ -152,7 +153,6 @@ impl TaskSpaceAdmittance {
             return Err(ConfigError::new("model", "has no moving joint"));
         }
         let (task, compliant) = axis_masks(config)?;
-        let k = task.iter().filter(|t| **t).count();
         let deviation = AxisDeviation::new(compliant, &config.linear, &config.angular)?;
         let ik = &config.inverse_kinematics;
         let gain = |key: &str, v: f64, bound: Bound| {
@@ -172,9 +172,9 @@ impl TaskSpaceAdmittance {
             ik.posture_velocity_gain,
             Bound::NonNegative,
         )?;
-        let wrench_inverse = DampedPseudoInverse::new(n, k, &config.wrench_damping)
+        let wrench_inverse = DampedPseudoInverse::new(n, task, &config.wrench_damping)
             .map_err(|e| e.within("wrench_damping"))?;
-        let ik_inverse = DampedPseudoInverse::new(n, k, &ik.damping)
+        let ik_inverse = DampedPseudoInverse::new(n, task, &ik.damping)
             .map_err(|e| e.within("inverse_kinematics.damping"))?;
         let saturation =
             build_saturation(&model, &config.saturation).map_err(|e| e.within("saturation"))?;
@@ -535,18 +535,9 @@ impl TaskSpaceAdmittance {
     pub fn wrench_damping(&self) -> f64 {
         self.wrench_inverse.damping()
     }
-    /// The smallest singular value of `J(q)` at the last step (of the `min(n, 6)` an arm of
-    /// `n` joints can have).
-    pub fn wrench_smallest_singular_value(&self) -> f64 {
-        self.wrench_inverse.smallest_singular_value()
-    }
     /// The damping of the inverse kinematics' pseudo-inverse at the last step.
     pub fn ik_damping(&self) -> f64 {
         self.ik_inverse.damping()
-    }
-    /// The smallest singular value of `J(q_a)` at the last step.
-    pub fn ik_smallest_singular_value(&self) -> f64 {
-        self.ik_inverse.smallest_singular_value()
     }
 }
 
