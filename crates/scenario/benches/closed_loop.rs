@@ -6,8 +6,8 @@
 //!   scenario's rate, metrics and the recorded series), for `SIM_SECONDS` simulated
 //!   seconds with the metrics window starting half-way.
 //! * `closed_loop/nn_compensated_2khz`: the same at a 2 kHz plant rate.
-//! * `closed_loop_parts/*`: a bare loop of sensors, controller and plant built from the
-//!   same resolved scenario, timing each part (printed as shares of the loop).
+//! * `closed_loop_parts/*`: a bare loop of sensors, `ClosedLoop` (its controller) and plant
+//!   built from the same resolved scenario, timing each part (printed as shares of the loop).
 //!
 //! After each group the real-time factor (simulated seconds per wall second) is printed
 //! from the median of the per-iteration times criterion measured.
@@ -16,9 +16,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use admittance_control::{ControlInput, Controller, NeuralController};
+use admittance_control::NeuralController;
 use admittance_dynamics::Model;
-use admittance_scenario::{run_variant, RunOptions, Scenario, ScenarioSource};
+use admittance_scenario::{
+    run_variant, ClosedLoop, EstimateSource, EstimateToController, LoopController, LoopInput,
+    LoopParts, RunOptions, Scenario, ScenarioSource, Trajectory,
+};
 use admittance_sim::{Plant, Sensors};
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -104,12 +107,12 @@ fn closed_loop(c: &mut Criterion) {
     group.finish();
 }
 
-/// The bare loop: trajectory, sensors, controller, plant; returns the time spent in
-/// (sensors, controller, plant).
+/// The bare loop: trajectory, sensors, the closed loop (the controller here: no admittance
+/// model, no observer), plant; returns the time spent in (sensors, closed loop, plant).
 struct Loop {
     scenario: Scenario,
     model: Arc<Model>,
-    joints: Vec<usize>,
+    trajectory: Trajectory,
 }
 
 impl Loop {
@@ -123,38 +126,21 @@ impl Loop {
             scenario.arm.tip.as_deref(),
         )
         .expect("model");
-        let joints = scenario
-            .trajectory
-            .sines
-            .iter()
-            .map(|s| model.joint_index(&s.joint).expect("joint"))
-            .collect();
+        let joints: Vec<String> = model.joint_names().map(String::from).collect();
+        let trajectory = Trajectory::new(&scenario.trajectory, &joints);
         Self {
             scenario,
             model: Arc::new(model),
-            joints,
+            trajectory,
         }
     }
 
-    fn reference(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
-        q.copy_from_slice(&self.scenario.trajectory.offset);
-        qd.fill(0.0);
-        qdd.fill(0.0);
-        for (s, &j) in self.scenario.trajectory.sines.iter().zip(&self.joints) {
-            let w = 2.0 * std::f64::consts::PI / s.period;
-            let x = w * t + s.phase;
-            q[j] += s.amplitude * x.sin();
-            qd[j] += s.amplitude * w * x.cos();
-            qdd[j] -= s.amplitude * w * w * x.sin();
-        }
-    }
-
-    /// Returns the time in (sensors, controller, plant) and the Newton iterations per
+    /// Returns the time in (sensors, closed loop, plant) and the Newton iterations per
     /// plant step.
     fn run(&self) -> ([Duration; 3], f64) {
         let n = self.model.nq();
         let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        self.reference(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
+        self.trajectory.eval(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
         let mut pc = self.scenario.plant.clone();
         pc.initial_q = q_d.clone();
         if let Some(seed) = self.scenario.seed {
@@ -162,34 +148,37 @@ impl Loop {
         }
         let mut plant = Plant::new(&self.model, &pc).expect("plant");
         let mut sensors = Sensors::new(&self.model, &pc.sensors, pc.control_rate_hz).expect("s");
-        let mut ctrl = NeuralController::new(self.model.clone(), &self.scenario.controller.neural)
+        let ctrl = NeuralController::new(self.model.clone(), &self.scenario.controller.neural)
             .expect("controller");
         let dt = plant.control_dt();
+        let mut closed_loop = ClosedLoop::new(LoopParts {
+            controller: LoopController::Neural(Box::new(ctrl)),
+            admittance: None,
+            estimate: EstimateSource::None,
+            estimate_to_controller: EstimateToController::Passed,
+            dt,
+        });
         let steps = (SIM_SECONDS / dt).round() as usize;
-        let mut tau = vec![0.0; n];
-        let (mut q, mut qd) = (vec![0.0; n], vec![0.0; n]);
         let zeros = vec![0.0; n];
         let mut parts = [Duration::ZERO; 3];
         for k in 0..steps {
             let t = k as f64 * dt;
-            self.reference(t, &mut q_d, &mut qd_d, &mut qdd_d);
+            self.trajectory.eval(t, &mut q_d, &mut qd_d, &mut qdd_d);
             let t0 = Instant::now();
-            let m = sensors.sample(t, plant.q(), &tau).expect("sample");
-            q.copy_from_slice(&m.q);
-            qd.copy_from_slice(&m.qdot);
+            let m = sensors
+                .sample(t, plant.q(), closed_loop.torque())
+                .expect("sample");
             let t1 = Instant::now();
-            let input = ControlInput {
+            let _ = closed_loop.step(&LoopInput {
                 time: t,
-                q: &q,
-                qdot: &qd,
-                q_ref: &q_d,
-                qdot_ref: &qd_d,
-                qddot_ref: &qdd_d,
-                external_torque_estimate: &zeros,
-            };
-            let _ = ctrl.step(&input, dt, &mut tau);
+                q_d: &q_d,
+                qdot_d: &qd_d,
+                qddot_d: &qdd_d,
+                measurement: m,
+                true_external_torque: &zeros,
+            });
             let t2 = Instant::now();
-            plant.step_control(&tau).expect("plant");
+            plant.step_control(closed_loop.torque()).expect("plant");
             let t3 = Instant::now();
             parts[0] += t1 - t0;
             parts[1] += t2 - t1;
@@ -233,7 +222,7 @@ fn closed_loop_parts(c: &mut Criterion) {
     report(&format!("closed_loop_parts/{VARIANT}"), &mut samples);
     let all: f64 = totals.iter().map(Duration::as_secs_f64).sum();
     let steps = (SIM_SECONDS * lp.scenario.plant.control_rate_hz).round();
-    for (name, t) in ["sensors", "controller", "plant"].iter().zip(totals) {
+    for (name, t) in ["sensors", "closed loop", "plant"].iter().zip(totals) {
         let t = t.as_secs_f64();
         println!(
             "  {name}: {:.1}% of the loop, {:.2} us per control step",

@@ -7,14 +7,16 @@ use std::sync::Arc;
 
 use admittance_control::{
     Admittance, ComputedTorqueController, ConfigError, HybridObserver, LearnedObserver,
-    MomentumObserver, NeuralController, Observer, PdController,
+    MomentumObserver, NeuralController, Observer, PdController, TaskSpaceAdmittance,
 };
 use admittance_dynamics::Model;
 use admittance_sim::{InputConditioner, Plant, Sensors, SimError};
 
 use crate::closed_loop::{
-    ClosedLoop, EstimateSource, EstimateToController, LoopController, LoopParts, ObserverStage,
+    ClosedLoop, Compliance, EstimateSource, EstimateToController, LoopController, LoopParts,
+    ObserverStage,
 };
+use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::metrics::ObserverTrainingMetrics;
 use crate::progress::RunOptions;
@@ -34,39 +36,9 @@ pub(crate) struct Assembly {
     pub closed_loop: ClosedLoop,
     /// A second admittance model driven by the true external torque (the reference the
     /// variant's is compared with, `admittance_error_rms`).
-    pub oracle_admittance: Option<Admittance>,
+    pub oracle_admittance: Option<Compliance>,
     pub observer_training: Option<ObserverTrainingMetrics>,
     pub observer_validation: Option<TimeSeries>,
-}
-
-/// A scenario's reading of one variant, with its source for located errors.
-pub(crate) struct Ctx<'a> {
-    pub source: &'a ScenarioSource,
-    pub variant: Option<&'a str>,
-}
-
-impl Ctx<'_> {
-    pub fn err(&self, key: &str, message: impl Into<String>, hint: Option<&str>) -> ScenarioError {
-        self.source
-            .error_at(key, self.variant, message, hint.map(String::from))
-    }
-
-    /// A controller or admittance configuration error, located at its key in the scenario
-    /// (`k2[1]` of `[controller.neural]` is written at `controller.neural.k2`).
-    pub fn config_err(&self, section: &str, e: &ConfigError) -> ScenarioError {
-        let key: String = e.key.split('[').next().unwrap_or("").to_string();
-        let path = if key.is_empty() {
-            section.to_string()
-        } else {
-            format!("{section}.{key}")
-        };
-        let hint = "change the value so that it meets the stated bound (the file or --set)";
-        let mut err = self.err(&path, e.message.clone(), Some(hint));
-        if e.key.contains('[') {
-            err.key = Some(format!("{section}.{}", e.key));
-        }
-        err
-    }
 }
 
 /// Resolves, validates and builds one variant of a scenario.
@@ -117,10 +89,13 @@ pub(crate) fn assemble(
     let dt = plant.control_dt();
 
     let controller = controller(&ctx, &scenario, Arc::new(model.clone()))?;
-    let admittance_model = || match &scenario.admittance {
-        Some(spec) if spec.enabled => Admittance::new(n, &spec.config)
-            .map(Some)
+    let admittance_model = || match (&scenario.admittance, &scenario.task_admittance) {
+        (Some(spec), _) if spec.enabled => Admittance::new(n, &spec.config)
+            .map(|a| Some(Compliance::Joint(a)))
             .map_err(|e| ctx.config_err("admittance", &e)),
+        (_, Some(config)) => TaskSpaceAdmittance::new(Arc::new(model.clone()), config)
+            .map(|a| Some(Compliance::Task(Box::new(a))))
+            .map_err(|e| ctx.config_err("task_admittance", &e)),
         _ => Ok(None),
     };
     let admittance = admittance_model()?;
@@ -171,7 +146,11 @@ pub(crate) fn assemble(
         controller,
         admittance,
         estimate,
-        estimate_to_controller: EstimateToController::OnlyWithoutAdmittance,
+        estimate_to_controller: if scenario.controller.subtract_estimate {
+            EstimateToController::Passed
+        } else {
+            EstimateToController::OnlyWithoutAdmittance
+        },
         dt,
     });
     Ok(Assembly {
@@ -252,8 +231,7 @@ fn observer(
                 _ => None,
             };
             let net = observer_network(
-                ctx.source,
-                ctx.variant,
+                ctx,
                 scenario,
                 path,
                 joints,

@@ -1,6 +1,6 @@
 //! The work and memory a run needs, checked against [`crate::Limits`] before it starts.
 
-use crate::assemble::Ctx;
+use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::limits::Limits;
 use crate::spec::Scenario;

@@ -14,8 +14,8 @@
 use std::time::Instant;
 
 use admittance_control::{
-    Admittance, AdmittanceInput, ControlInput, Controller, NeuralController, Observer,
-    ObserverInput, StepStatus,
+    Admittance, CompliantReference, ControlInput, Controller, NeuralController, Observer,
+    ObserverInput, ReferenceInput, Saturation, StepStatus, TaskSpaceAdmittance,
 };
 use admittance_sim::{InputConditioner, Measurement};
 
@@ -120,6 +120,55 @@ impl ObserverStage {
     }
 }
 
+/// The admittance model that shapes the reference: joint space (METHOD.md section 2,
+/// eq. 5-7 per joint) or task space (the hand's pose, `f_ext_hat = J^{+T} tau_ext_hat`).
+#[allow(clippy::large_enum_variant)] // built once per loop
+pub enum Compliance {
+    /// `C_d (q_a' - q_d') + G_d (q_a - q_d) = tau_ext_hat`, saturated.
+    Joint(Admittance),
+    /// The hand's admittance mapped to the joints by differential inverse kinematics.
+    Task(Box<TaskSpaceAdmittance>),
+}
+
+impl Compliance {
+    fn as_dyn(&self) -> &dyn CompliantReference {
+        match self {
+            Compliance::Joint(a) => a,
+            Compliance::Task(a) => a.as_ref(),
+        }
+    }
+
+    fn as_dyn_mut(&mut self) -> &mut dyn CompliantReference {
+        match self {
+            Compliance::Joint(a) => a,
+            Compliance::Task(a) => a.as_mut(),
+        }
+    }
+
+    /// One step from the desired trajectory, the measured angles and the estimate.
+    pub fn step(&mut self, input: &ReferenceInput<'_>, dt: f64) -> StepStatus {
+        self.as_dyn_mut().step_reference(input, dt)
+    }
+
+    /// `q_r`.
+    pub fn q_r(&self) -> &[f64] {
+        self.as_dyn().q_r()
+    }
+
+    /// The reference saturation (eq. 7), if any.
+    pub fn saturation(&self) -> Option<&Saturation> {
+        self.as_dyn().saturation()
+    }
+
+    /// The task-space model, if that is the kind.
+    pub fn task_space(&self) -> Option<&TaskSpaceAdmittance> {
+        match self {
+            Compliance::Task(a) => Some(a),
+            Compliance::Joint(_) => None,
+        }
+    }
+}
+
 /// Where the external-torque estimate comes from.
 pub enum EstimateSource {
     /// No estimate: zeros.
@@ -174,7 +223,7 @@ pub struct LoopParts {
     /// The controller.
     pub controller: LoopController,
     /// The admittance model; `None`: `q_r = q_d`.
-    pub admittance: Option<Admittance>,
+    pub admittance: Option<Compliance>,
     /// The source of `tau_ext_hat`.
     pub estimate: EstimateSource,
     /// Whether the controller gets the estimate.
@@ -186,7 +235,7 @@ pub struct LoopParts {
 /// One control period's wiring: observer -> admittance model -> controller.
 pub struct ClosedLoop {
     controller: LoopController,
-    admittance: Option<Admittance>,
+    admittance: Option<Compliance>,
     estimate_source: EstimateSource,
     estimate_to_controller: EstimateToController,
     dt: f64,
@@ -240,14 +289,16 @@ impl ClosedLoop {
         match self.admittance.as_mut() {
             Some(adm) => {
                 let _ = adm.step(
-                    &AdmittanceInput {
+                    &ReferenceInput {
                         q_d: input.q_d,
                         qdot_d: input.qdot_d,
                         qddot_d: input.qddot_d,
+                        q: &input.measurement.q,
                         external_torque_estimate: &self.estimate,
                     },
                     dt,
                 );
+                let adm = adm.as_dyn();
                 copy(&mut self.q_r, adm.q_r());
                 copy(&mut self.qdot_r, adm.qdot_r());
                 copy(&mut self.qddot_r, adm.qddot_r());
@@ -310,7 +361,7 @@ impl ClosedLoop {
     }
 
     /// The admittance model, if any.
-    pub fn admittance(&self) -> Option<&Admittance> {
+    pub fn admittance(&self) -> Option<&Compliance> {
         self.admittance.as_ref()
     }
 

@@ -24,10 +24,13 @@
 // Scenario errors carry the file, line, key and hint by value; they are the cold path,
 // returned once per bad file, so their size is not worth a box on every signature.
 #![allow(clippy::result_large_err)]
+// Bounds are written `!(x <= bound)` on purpose: a NaN fails them.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod assemble;
 mod budget;
 mod closed_loop;
+mod context;
 mod error;
 mod free_motion;
 mod health;
@@ -43,8 +46,8 @@ mod training;
 mod trajectory;
 
 pub use closed_loop::{
-    ClosedLoop, EstimateSource, EstimateToController, LoopController, LoopInput, LoopParts,
-    LoopStatus, ObserverStage,
+    ClosedLoop, Compliance, EstimateSource, EstimateToController, LoopController, LoopInput,
+    LoopParts, LoopStatus, ObserverStage,
 };
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};

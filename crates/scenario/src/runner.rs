@@ -4,12 +4,13 @@
 
 use std::path::Path;
 
-use admittance_control::{true_lumped_f, AdmittanceInput, GrowthRequest, NetworkId};
+use admittance_control::{true_lumped_f, GrowthRequest, NetworkId, ReferenceInput};
 use admittance_dynamics::{forward_kinematics, Data};
 use admittance_sim::SimError;
 
-use crate::assemble::{assemble, Assembly, Ctx};
+use crate::assemble::{assemble, Assembly};
 use crate::closed_loop::{ClosedLoop, LoopInput};
+use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::health::{Divergence, Health};
 use crate::metrics::{median, rms, DynamicNodeMetrics, JointStats, ObserverStats, VariantMetrics};
@@ -182,10 +183,11 @@ fn simulate_variant(
         }
         tau_filtered_prev.copy_from_slice(&m.tau_filtered);
         if let Some(adm) = oracle_admittance.as_mut() {
-            let input = AdmittanceInput {
+            let input = ReferenceInput {
                 q_d: &q_d,
                 qdot_d: &qd_d,
                 qddot_d: &qdd_d,
+                q: &m.q,
                 external_torque_estimate: plant.tau_ext(),
             };
             let _ = adm.step(&input, dt);

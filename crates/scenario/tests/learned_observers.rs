@@ -73,7 +73,7 @@ fn learned_variants_train_validate_cache_and_estimate() {
         assert!(number(r, "train_seconds") > 0.0, "{}", r.name);
         assert_eq!(number(r, "training_samples"), 40_000.0, "{}", r.name);
         assert_eq!(
-            common::metric(&r, "observer_model_cached"),
+            common::metric(r, "observer_model_cached"),
             Value::Bool(false)
         );
         let v = per_joint(r, "validation_nrmse");

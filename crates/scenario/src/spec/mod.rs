@@ -21,6 +21,7 @@
 //! [plant]                    # admittance_sim::PlantConfig: friction, deadzones, spring, sensors, ...
 //! [controller]               # kind = "neural" | "pd" | "computed_torque", with [controller.neural] etc.
 //! [admittance]               # optional: admittance model and reference saturation
+//! [task_admittance]          # optional, instead: the hand's admittance (linear, angular, axes, IK)
 //! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz
 //! [observer.training]        # learned / hybrid: free-motion data, validation data, nodes, friction inputs, cache
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
@@ -34,7 +35,7 @@ use std::path::{Path, PathBuf};
 
 use admittance_control::{
     AdmittanceConfig, ComputedTorqueConfig, GrowthParams, MomentumObserverConfig,
-    NeuralControllerConfig, PdConfig,
+    NeuralControllerConfig, PdConfig, TaskSpaceAdmittanceConfig,
 };
 use serde::{Deserialize, Serialize};
 
@@ -108,6 +109,12 @@ pub struct ControllerSpec {
     /// Settings of computed torque.
     #[serde(default)]
     pub computed_torque: Option<ComputedTorqueConfig>,
+    /// Whether the control law subtracts the external-torque estimate (METHOD.md section 3,
+    /// the paper's eq. 26: `tau = ... - tau_ext_hat`). Default true. With false and an
+    /// admittance model, the estimate acts only through the compliant reference
+    /// (docs/experiments.md shows both on experiment B).
+    #[serde(default = "yes")]
+    pub subtract_estimate: bool,
 }
 
 /// Where the external-torque estimate that drives the admittance model comes from.
@@ -360,9 +367,12 @@ pub struct Scenario {
     pub plant: PlantConfig,
     /// The controller.
     pub controller: ControllerSpec,
-    /// The admittance model (absent: `q_r = q_d`).
+    /// The joint-space admittance model (absent: `q_r = q_d`).
     #[serde(default)]
     pub admittance: Option<AdmittanceSpec>,
+    /// The task-space admittance model at the hand (exclusive with `[admittance]`).
+    #[serde(default)]
+    pub task_admittance: Option<TaskSpaceAdmittanceConfig>,
     /// The external-torque estimate.
     #[serde(default)]
     pub observer: ObserverSpec,

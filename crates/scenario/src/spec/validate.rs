@@ -204,6 +204,12 @@ impl Scenario {
                 }
             }
         }
+        if self.task_admittance.is_some() && self.admittance.as_ref().is_some_and(|a| a.enabled) {
+            out.push(
+                Invalid::new("task_admittance", "a scenario has one admittance model: [admittance] (joint space) or [task_admittance] (the hand), not both")
+                    .hint("remove one of the two tables, or set admittance.enabled = false"),
+            );
+        }
         if self.output.decimation == 0 {
             out.push(Invalid::new("output.decimation", "must be at least 1"));
         }

@@ -18,6 +18,7 @@ use admittance_learning::broad::{
 };
 use serde_json::{json, Value};
 
+use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::progress::{Progress, ProgressFn, RunOptions, Stage};
 use crate::series::TimeSeries;
@@ -118,18 +119,6 @@ fn cache_dir(scenario_file: &Path, spec: &TrainingSpec) -> PathBuf {
     match std::env::var_os("ADMITTANCE_CACHE_DIR") {
         Some(dir) if !dir.is_empty() => PathBuf::from(dir),
         _ => resolve(scenario_file, &spec.cache_dir),
-    }
-}
-
-struct Ctx<'a> {
-    source: &'a ScenarioSource,
-    variant: Option<&'a str>,
-}
-
-impl Ctx<'_> {
-    fn err(&self, key: &str, message: String, hint: Option<&str>) -> ScenarioError {
-        self.source
-            .error_at(key, self.variant, message, hint.map(String::from))
     }
 }
 
@@ -320,8 +309,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// The network of a learned or hybrid observer, from the cache or trained now. `nominal`
 /// is the momentum observer's nominal model for `hybrid`.
 pub(crate) fn observer_network(
-    source: &ScenarioSource,
-    variant: Option<&str>,
+    ctx: &Ctx<'_>,
     scenario: &Scenario,
     scenario_file: &Path,
     arm_joints: &[String],
@@ -329,18 +317,14 @@ pub(crate) fn observer_network(
     options: &RunOptions,
     simulate: SimulateData<'_>,
 ) -> Result<TrainedNetwork, ScenarioError> {
-    let ctx = Ctx { source, variant };
+    let variant = ctx.variant;
     let Some(spec) = scenario.observer.training.as_ref() else {
-        return Err(ctx.err(
-            "observer.kind",
-            "needs an [observer.training] table".into(),
-            None,
-        ));
+        return Err(ctx.err("observer.kind", "needs an [observer.training] table", None));
     };
     let n = arm_joints.len();
-    let train_src = data_source(&ctx, scenario_file, "observer.training.data", &spec.data)?;
+    let train_src = data_source(ctx, scenario_file, "observer.training.data", &spec.data)?;
     let val_src = data_source(
-        &ctx,
+        ctx,
         scenario_file,
         "observer.training.validation",
         &spec.validation,
@@ -390,8 +374,8 @@ pub(crate) fn observer_network(
     let model_path = dir.join(format!("{stem}.broad"));
     let meta_path = dir.join(format!("{stem}.json"));
     let filter = scenario.observer.input_filter_hz;
-    let validation = load_data(&ctx, &val_src, options, simulate)?;
-    let (xv, yv) = arrays(&ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
+    let validation = load_data(ctx, &val_src, options, simulate)?;
+    let (xv, yv) = arrays(ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
     if spec.cache {
         if let Some(mut hit) = read_cache(&model_path, &meta_path, &key_text) {
             hit.validation_series =
@@ -401,8 +385,8 @@ pub(crate) fn observer_network(
     }
 
     let label = variant.unwrap_or("base");
-    let train = load_data(&ctx, &train_src, options, simulate)?;
-    let (x, y) = arrays(&ctx, &train, train_src.key, arm_joints, nominal, filter)?;
+    let train = load_data(ctx, &train_src, options, simulate)?;
+    let (x, y) = arrays(ctx, &train, train_src.key, arm_joints, nominal, filter)?;
     let learn_err = |e: admittance_learning::broad::BroadError| {
         ctx.err("observer.training", e.to_string(), None)
     };
