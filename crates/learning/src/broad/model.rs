@@ -1,6 +1,7 @@
 //! The trained flat RBF network: fit with lambda selection, incremental growth,
 //! allocation-free prediction (METHOD.md section 5).
 
+use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
 use super::config::{BroadConfig, FrictionFeatures, GramStrategy};
 use super::data::{check_finite, Dataset, Standardiser};
@@ -8,6 +9,7 @@ use super::error::BroadError;
 use super::features::{FeatureMap, NodeSet};
 use super::gram::{accumulate_gram, accumulate_new_rows, prediction_sse};
 use super::kernels;
+use super::provenance::{CentreSettings, FitSettings, GrowthRecord, Provenance};
 use super::solve::{extend_factor, factor, solve, sse_from_gram};
 use faer::{Mat, MatRef, Par};
 use serde::{Deserialize, Serialize};
@@ -148,6 +150,8 @@ pub struct BroadModel {
     /// W^T, d_out x P, row-major (prediction layout).
     pub(crate) wt: Vec<f64>,
     pub(crate) state: Option<GrowthState>,
+    /// What the model knows about how it was made (`provenance.rs`).
+    pub(crate) provenance: Provenance,
 }
 
 fn par_for(threads: usize) -> Par {
@@ -206,6 +210,33 @@ fn train_nrmse(state: &GrowthState, w: MatRef<'_, f64>) -> Vec<f64> {
     nrmse(&sse, state.n_samples, &std)
 }
 
+/// A fit whose weights or error measures are not finite (an ill-conditioned system that
+/// the Cholesky test let through, overflowing sums) is an error, never a model.
+fn check_finite_result(
+    w: MatRef<'_, f64>,
+    validation_nrmse: &[f64],
+    train_nrmse: &[f64],
+) -> Result<(), BroadError> {
+    for j in 0..w.ncols() {
+        for i in 0..w.nrows() {
+            if !w[(i, j)].is_finite() {
+                return Err(BroadError::NonFiniteResult(format!(
+                    "weight of pattern column {i}, output {j} is {}",
+                    w[(i, j)]
+                )));
+            }
+        }
+    }
+    for (what, v) in [("validation", validation_nrmse), ("training", train_nrmse)] {
+        if let Some((o, e)) = v.iter().enumerate().find(|(_, e)| !e.is_finite()) {
+            return Err(BroadError::NonFiniteResult(format!(
+                "{what} NRMSE of output {o} is {e}"
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn check_same_widths(train: &Dataset<'_>, other: &Dataset<'_>) -> Result<(), BroadError> {
     if other.d_in() != train.d_in() {
         return Err(BroadError::Dimension {
@@ -246,6 +277,14 @@ pub fn fit(
     if validation.is_none() && config.lambda_grid.len() > 1 {
         return Err(BroadError::NeedValidation(config.lambda_grid.len()));
     }
+    let size = FitSize::fit(
+        train.n_samples(),
+        validation.map_or(0, |v| v.n_samples()),
+        train.d_in(),
+        train.d_out(),
+        config,
+    );
+    check_budget(&size, &config.budget)?;
     let standardiser = Standardiser::from_data(train);
     let t_std = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -267,7 +306,20 @@ pub fn fit(
         centres_s: t_centres,
         ..Default::default()
     };
-    let out = fit_inner(train, validation, config, standardiser, nodes, &mut times);
+    let centres = CentreSettings {
+        centre_subsample: config.centre_subsample,
+        seed: config.seed,
+        widths: config.widths.clone(),
+    };
+    let out = fit_inner(
+        train,
+        validation,
+        config,
+        standardiser,
+        nodes,
+        Some(centres),
+        &mut times,
+    );
     times.total_s = t0.elapsed().as_secs_f64();
     out.map(|(m, mut r)| {
         r.times = times;
@@ -293,6 +345,15 @@ pub fn fit_with_nodes(
     if validation.is_none() && config.lambda_grid.len() > 1 {
         return Err(BroadError::NeedValidation(config.lambda_grid.len()));
     }
+    let mut size = FitSize::fit(
+        train.n_samples(),
+        validation.map_or(0, |v| v.n_samples()),
+        train.d_in(),
+        train.d_out(),
+        config,
+    );
+    size.nodes = nodes.len();
+    check_budget(&size, &config.budget)?;
     let standardiser = Standardiser::from_data(train);
     let mut times = PhaseTimes {
         standardise_s: t0.elapsed().as_secs_f64(),
@@ -304,6 +365,7 @@ pub fn fit_with_nodes(
         config,
         standardiser,
         nodes.clone(),
+        None,
         &mut times,
     );
     times.total_s = t0.elapsed().as_secs_f64();
@@ -319,6 +381,7 @@ fn fit_inner(
     config: &BroadConfig,
     standardiser: Standardiser,
     nodes: NodeSet,
+    centres: Option<CentreSettings>,
     times: &mut PhaseTimes,
 ) -> Result<(BroadModel, FitReport), BroadError> {
     let threads = config.thread_count();
@@ -411,7 +474,15 @@ fn fit_inner(
     };
     let train_e = train_nrmse(&state, w.as_ref());
     times.solve_s += t.elapsed().as_secs_f64();
+    check_finite_result(w.as_ref(), &validation_nrmse, &train_e)?;
 
+    let fit_settings = FitSettings {
+        nodes: fm.n_nodes(),
+        centres,
+        lambda_grid: config.lambda_grid.clone(),
+        training_rows: n,
+        validation_rows: validation.map_or(0, |v| v.n_samples()),
+    };
     let mut model = BroadModel {
         fm,
         d_out,
@@ -420,6 +491,10 @@ fn fit_inner(
         w: Vec::new(),
         wt: Vec::new(),
         state: Some(state),
+        provenance: Provenance {
+            fit: Some(fit_settings),
+            ..Provenance::default()
+        },
     };
     model.set_weights(w.as_ref());
     let report = FitReport {
@@ -651,6 +726,7 @@ impl BroadModel {
             },
         )?;
         let w = solve(chol.as_ref(), state.aty.as_ref(), par);
+        check_finite_result(w.as_ref(), &[], &[])?;
         state.chol = chol;
         self.lambda = lambda;
         self.lambda_rel = lambda_rel;
@@ -692,6 +768,12 @@ impl BroadModel {
         }
         let state = self.state.as_ref().ok_or(BroadError::NoGrowthState)?;
         self.check_training_data(train, state)?;
+        let added = match spec {
+            GrowthSpec::Nodes(ns) => ns.len(),
+            GrowthSpec::KMeansPlusPlus { count, .. } => *count,
+        };
+        let size = FitSize::growth(self, train.n_samples(), 0, added, config);
+        check_budget(&size, &config.budget)?;
         let threads = config.thread_count();
         let par = par_for(threads);
 
@@ -792,7 +874,19 @@ impl BroadModel {
         };
         let train_e = train_nrmse(&new_state, w.as_ref());
         let solve_s = t.elapsed().as_secs_f64();
+        check_finite_result(w.as_ref(), &[], &train_e)?;
 
+        self.provenance.growth.push(GrowthRecord {
+            nodes_added: k,
+            centres: match spec {
+                GrowthSpec::Nodes(_) => None,
+                GrowthSpec::KMeansPlusPlus { seed, .. } => Some(CentreSettings {
+                    centre_subsample: config.centre_subsample,
+                    seed: *seed,
+                    widths: config.widths.clone(),
+                }),
+            },
+        });
         self.fm = fm;
         self.state = Some(new_state);
         self.set_weights(w.as_ref());
