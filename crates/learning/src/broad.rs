@@ -70,8 +70,10 @@ mod data;
 mod destination;
 mod error;
 mod features;
+mod fit;
 mod gram;
 mod greville;
+mod growth;
 mod io;
 mod kernels;
 mod model;
@@ -87,13 +89,12 @@ pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
 pub use destination::check_model_destination;
 pub use error::BroadError;
 pub use features::NodeSet;
+pub use fit::{fit, fit_with_nodes, FitReport, LambdaScore, PhaseTimes};
 pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
+pub use growth::{GrowthReport, GrowthSpec};
 pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
 pub use kernels::exp_nonpositive_slice;
-pub use model::{
-    fit, fit_with_nodes, BroadModel, FitReport, GrowthReport, GrowthSpec, LambdaScore, PhaseTimes,
-    Workspace,
-};
+pub use model::{BroadModel, Workspace};
 pub use provenance::{
     ArmCheck, ArmIdentity, CentreSettings, DataSettings, FitSettings, GrowthRecord, Provenance,
     TrainingTarget, ValidationSplit,
