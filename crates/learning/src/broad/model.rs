@@ -361,3 +361,29 @@ impl BroadModel {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_results_are_errors_naming_what() {
+        let mut w = Mat::<f64>::zeros(4, 2);
+        assert!(check_finite_result(w.as_ref(), &[0.1, 0.2], &[0.1, 0.3]).is_ok());
+        w[(3, 1)] = f64::NAN;
+        let e = check_finite_result(w.as_ref(), &[], &[]).unwrap_err();
+        assert!(
+            matches!(&e, BroadError::NonFiniteResult(m) if m.contains("pattern column 3, output 1 is NaN")),
+            "{e}"
+        );
+        w[(3, 1)] = 0.0;
+        let e = check_finite_result(w.as_ref(), &[0.1, f64::INFINITY], &[]).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("validation NRMSE of output 1 is inf"),
+            "{e}"
+        );
+        let e = check_finite_result(w.as_ref(), &[], &[f64::NAN]).unwrap_err();
+        assert!(e.to_string().contains("training NRMSE of output 0"), "{e}");
+    }
+}
