@@ -46,7 +46,7 @@ pub enum FreeMotionError {
         message: String,
     },
     /// A required column is absent from the header.
-    #[error("{source_name}:{line}: missing column `{column}` (need t, q.J, qdot.J, qddot.J, tau.J for every joint J named by a q.J column)")]
+    #[error("{source_name}:{line}: missing column `{column}` (need t, and q.J, qdot.J, qddot.J, tau.J for every joint J: the arm's joints, or those of the q.J columns)")]
     MissingColumn {
         /// The file.
         source_name: String,
