@@ -230,3 +230,31 @@ fn a_run_that_blows_up_fails_with_exit_1_and_says_where() {
         );
     }
 }
+
+#[test]
+fn an_observer_network_that_cannot_fit_is_refused_before_its_data_are_simulated() {
+    let tmp = tempdir();
+    let out = tmp.path().join("out");
+    let scenario = root().join("scenarios/admittance.toml");
+    let started = std::time::Instant::now();
+    let (code, err) = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "learned",
+        "--set",
+        "observer.training.nodes=4294967296",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("observer.training.nodes") && err.contains("4294967296"),
+        "{err}"
+    );
+    assert!(
+        started.elapsed().as_secs() < 10,
+        "refused before simulating 450 s of data"
+    );
+    assert!(!out.exists());
+}

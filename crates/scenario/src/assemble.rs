@@ -234,7 +234,7 @@ fn observer(
                 ctx,
                 scenario,
                 path,
-                joints,
+                model,
                 nominal_model.as_ref(),
                 options,
                 simulate,

@@ -150,6 +150,62 @@ fn learned_variants_train_validate_cache_and_estimate() {
     );
     assert!((a - b).abs() <= 1e-9 * b.abs(), "{a} vs {b}");
 
+    // An edited index entry does not verify: the network is trained again and the true
+    // validation error reported (issue 14: editing the .json changed the reported value).
+    let metas: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    for p in &metas {
+        let mut meta: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+        meta["validation_nrmse"][0] = Value::from(0.001);
+        std::fs::write(p, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
+    }
+    let edited = run("learned");
+    assert_eq!(
+        common::metric(&edited, "observer_model_cached"),
+        Value::Bool(false)
+    );
+    assert_eq!(
+        per_joint(&edited, "validation_nrmse")[0],
+        per_joint(&learned, "validation_nrmse")[0]
+    );
+    // Another entry's model file copied over this one is not used either.
+    let _ = run("hybrid");
+    let models: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "broad"))
+        .collect();
+    let hybrid_model = models
+        .iter()
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("hybrid-")
+        })
+        .expect("hybrid entry");
+    // Both learned variants' entries (with and without friction inputs).
+    for p in models.iter().filter(|p| {
+        p.file_name()
+            .unwrap()
+            .to_string_lossy()
+            .starts_with("learned-")
+    }) {
+        std::fs::copy(hybrid_model, p).unwrap();
+    }
+    let swapped = run("learned");
+    assert_eq!(
+        common::metric(&swapped, "observer_model_cached"),
+        Value::Bool(false)
+    );
+    assert_eq!(
+        number(&swapped, "external_torque_nrmse"),
+        number(&edited, "external_torque_nrmse")
+    );
+
     // A changed setting is a different key: trained, not loaded.
     let source2 = source_with(
         &[
