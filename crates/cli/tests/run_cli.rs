@@ -53,7 +53,8 @@ k2 = 6.0
 [admittance]
 damping = 3.0
 stiffness = 5.0
-saturation = {{ rho = 0.95, centre = 0.0, half_range = 3.1 }}
+# Inside every joint's limits (a wider interval is refused: q_r could leave them).
+saturation = {{ rho = 0.95, centre = [0.0, -0.55, 0.0, 1.284, 0.0, 0.262, 0.0], half_range = [1.5, 1.5, 1.5, 1.3, 1.5, 1.5, 1.5] }}
 "#,
         urdf.display()
     )
@@ -157,6 +158,16 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
             "offset length",
             good.replace("-0.67, 1.03, -0.5]", "-0.67]"),
             "trajectory.offset",
+        ),
+        (
+            "pose outside the arm's limits",
+            good.replace("1.94, -0.67", "4.0, -0.67"),
+            "trajectory.offset",
+        ),
+        (
+            "faster than the velocity limit",
+            good.replace("period = 2.0", "period = 0.5"),
+            "trajectory.sines.0.amplitude",
         ),
         ("bad TOML", good.replace("[plant]", "[plant"), ""),
     ];

@@ -127,7 +127,11 @@ impl Loop {
         )
         .expect("model");
         let joints: Vec<String> = model.joint_names().map(String::from).collect();
-        let trajectory = Trajectory::new(&scenario.trajectory, &joints);
+        let trajectory = Trajectory::new(
+            &scenario.trajectory,
+            &joints,
+            &admittance_scenario::mid_range(&model),
+        );
         Self {
             scenario,
             model: Arc::new(model),

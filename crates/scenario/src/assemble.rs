@@ -65,13 +65,20 @@ pub(crate) fn assemble(
         )
     })?;
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
-    let problems = scenario.validate(&joints);
+    let mut problems = scenario.validate(&joints);
+    if problems.is_empty() {
+        problems = scenario.validate_for_arm(&model);
+    }
     if !problems.is_empty() {
         return Err(source.invalid(variant, &problems));
     }
     crate::budget::check_run(&ctx, &scenario, joints.len(), &options.limits)?;
     let n = model.nq();
-    let trajectory = Trajectory::new(&scenario.trajectory, &joints);
+    let trajectory = Trajectory::new(
+        &scenario.trajectory,
+        &joints,
+        &crate::spec::mid_range(&model),
+    );
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     trajectory.eval(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
 
@@ -108,7 +115,6 @@ pub(crate) fn assemble(
         &scenario,
         &model,
         path,
-        &joints,
         options,
         simulate,
         &mut observer_training,
@@ -206,7 +212,6 @@ fn observer(
     scenario: &Scenario,
     model: &Model,
     path: &Path,
-    joints: &[String],
     options: &RunOptions,
     simulate: SimulateData<'_>,
     training: &mut Option<ObserverTrainingMetrics>,

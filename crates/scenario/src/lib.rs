@@ -33,6 +33,7 @@ mod closed_loop;
 mod context;
 mod error;
 mod free_motion;
+mod hand;
 mod health;
 mod limits;
 mod metrics;
@@ -53,7 +54,7 @@ pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use health::Divergence;
 pub use limits::Limits;
-pub use metrics::{DynamicNodeMetrics, ObserverTrainingMetrics, VariantMetrics};
+pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
 pub use run_folder::{
     check_out_dir, remove_stale_partials, run_scenario, write_series_csv, RunError, RunSummary,
@@ -62,8 +63,9 @@ pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};
 pub use source::ScenarioSource;
 pub use spec::{
-    AdmittanceSpec, ArmSpec, ControllerKind, ControllerSpec, DynamicNodesSpec, ObserverKind,
-    ObserverSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec, TrajectorySpec,
+    mid_range, AdmittanceSpec, ArmSpec, ControllerKind, ControllerSpec, DynamicNodesSpec,
+    ObserverKind, ObserverSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec,
+    TrajectorySpec,
 };
 pub use training::{TrainedNetwork, VALIDATION_DECIMATION};
 pub use trajectory::Trajectory;

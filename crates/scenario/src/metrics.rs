@@ -68,6 +68,27 @@ pub struct VariantMetrics {
     /// Experiment C.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub dynamic_nodes: Option<DynamicNodeMetrics>,
+    /// Task-space runs: the hand.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub hand: Option<HandMetrics>,
+}
+
+/// The hand of a task-space run (issue 16; docs/outputs.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct HandMetrics {
+    /// RMS of the estimated minus the true hand force while in contact (N); `None` without
+    /// contact.
+    pub wrench_estimate_rmse: Option<f64>,
+    /// That over the RMS true force in contact.
+    pub wrench_estimate_nrmse: Option<f64>,
+    /// RMS estimated hand force while nothing touches the hand (N).
+    pub false_force_rms: f64,
+    /// Largest true force on the hand (N).
+    pub contact_force_max: f64,
+    /// RMS distance of the hand from the `oracle` variant's (m), when that variant ran.
+    pub hand_compliance_error_rms: Option<f64>,
+    /// How far the hand moves after the last contact has ended and 0.5 s have passed (m).
+    pub hand_drift_after_release: Option<f64>,
 }
 
 /// A learned observer's network (docs/outputs.md).

@@ -208,6 +208,10 @@ pub fn run_scenario(
         progress(v.as_deref().unwrap_or("base"), k, selected.len());
         runs.push(run_variant(&source, path, v.as_deref(), options)?);
     }
+    let evaluation_start = source
+        .resolve::<Scenario>(selected[0].as_deref())?
+        .evaluation_start;
+    crate::hand::across_variants(&mut runs, evaluation_start);
     let summary = summary_json(&scenario_name, &runs);
     write_folder(out_dir, path, force, |partial| {
         for run in &runs {
@@ -262,7 +266,15 @@ fn failures(run: &VariantRun) -> Vec<String> {
         }
     }
     for (k, v) in run.metrics.to_map() {
-        let may_be_null = matches!(k.as_str(), "external_torque_nrmse" | "diverged_at");
+        let may_be_null = matches!(
+            k.as_str(),
+            "external_torque_nrmse"
+                | "diverged_at"
+                | "wrench_estimate_rmse"
+                | "wrench_estimate_nrmse"
+                | "hand_compliance_error_rms"
+                | "hand_drift_after_release"
+        );
         if !(finite(&v) || may_be_null && v.is_null()) {
             out.push(format!(
                 "variant `{}`: metric `{k}` is not finite",

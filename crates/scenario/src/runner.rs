@@ -12,6 +12,7 @@ use crate::assemble::{assemble, Assembly};
 use crate::closed_loop::{ClosedLoop, LoopInput};
 use crate::context::Ctx;
 use crate::error::ScenarioError;
+use crate::hand::{hand_columns, HandStats};
 use crate::health::{Divergence, Health};
 use crate::metrics::{median, rms, DynamicNodeMetrics, JointStats, ObserverStats, VariantMetrics};
 use crate::progress::{RunOptions, Stage};
@@ -139,8 +140,17 @@ fn simulate_variant(
     let steps = (scenario.duration / dt).round() as usize;
     let decimation = scenario.output.decimation;
     let with_nodes = closed_loop.neural().is_some();
+    // A task-space run records the hand: forces and positions.
+    let with_hand = closed_loop
+        .admittance()
+        .is_some_and(|c| c.task_space().is_some());
+    let mut hand_stats = with_hand.then(HandStats::default);
+    let mut columns = variant_columns(&joints, events.is_some(), with_nodes);
+    if with_hand {
+        columns.extend(hand_columns());
+    }
     let mut series = TimeSeries {
-        columns: variant_columns(&joints, events.is_some(), with_nodes),
+        columns,
         rows: Vec::new(),
     };
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -272,7 +282,13 @@ fn simulate_variant(
         let _ = forward_kinematics(plant.model(), &mut kin_data, q_r);
         let p_ref = kin_data.frame_placements[tip].translation;
         let _ = forward_kinematics(plant.model(), &mut kin_data, plant.q());
-        let ee_error = (kin_data.frame_placements[tip].translation - p_ref).norm();
+        let p_hand = kin_data.frame_placements[tip].translation;
+        let ee_error = (p_hand - p_ref).norm();
+        let hand_force = plant.environment().tip_force();
+        let hand_estimate = closed_loop
+            .admittance()
+            .and_then(|c| c.task_space())
+            .map(|a| &a.wrench_estimate()[..3]);
         if t >= scenario.evaluation_start {
             tracking.add(q_r.iter().zip(plant.q()).map(|(r, q)| r - q));
             torque.add(tau.iter().copied());
@@ -284,6 +300,9 @@ fn simulate_variant(
                 oracle_admittance.as_ref().map(|a| a.q_r()),
             );
             ee_errors.push(ee_error);
+            if let (Some(h), Some(f_hat)) = (hand_stats.as_mut(), hand_estimate) {
+                h.add(&hand_force, f_hat);
+            }
             window_steps += 1;
             for (c, dz) in deadzone_steps.iter_mut().zip(&record.in_deadzone) {
                 *c += *dz as usize;
@@ -312,6 +331,14 @@ fn simulate_variant(
             }
             if let Some(nn) = closed_loop.neural() {
                 row.push(nn.node_count(NetworkId::F) as f64);
+            }
+            if let Some(f_hat) = hand_estimate {
+                row.extend_from_slice(&hand_force);
+                row.extend_from_slice(f_hat);
+                row.extend_from_slice(p_hand.as_slice());
+                row.extend_from_slice(p_ref.as_slice());
+                let _ = forward_kinematics(plant.model(), &mut kin_data, &q_d);
+                row.extend_from_slice(kin_data.frame_placements[tip].translation.as_slice());
             }
             series.rows.push(row);
         }
@@ -347,6 +374,7 @@ fn simulate_variant(
         ..VariantMetrics::default()
     };
     observer_stats.finish(&mut metrics, oracle_admittance.is_some());
+    metrics.hand = hand_stats.map(|h| h.finish());
     if let Some(nn) = closed_loop.neural() {
         metrics.nodes = nn
             .network_ids()

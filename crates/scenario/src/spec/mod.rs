@@ -29,6 +29,8 @@
 //! [variants.NAME]            # overrides of any of the above, per variant
 //! ```
 
+mod arm_fit;
+pub use arm_fit::mid_range;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -70,12 +72,21 @@ pub struct SineSpec {
     pub phase: f64,
 }
 
-/// The desired joint trajectory `q_d(t)`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// The desired joint trajectory `q_d(t)`: a pose (`offset`, or `waypoints` to move between
+/// poses) plus sines.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrajectorySpec {
-    /// Constant part, one value per joint.
-    pub offset: Vec<f64>,
+    /// Constant part, one value per joint. Default: the middle of each joint's limits (0
+    /// for a joint without limits), a pose that fits whatever arm the scenario names.
+    #[serde(default)]
+    pub offset: Option<Vec<f64>>,
+    /// Poses to move between, instead of `offset`: `[[t, q_1, ..., q_n], ...]`, times
+    /// strictly increasing. Before the first the pose is held, between two the joints move
+    /// with a quintic blend (zero velocity and acceleration at each waypoint), after the
+    /// last it is held.
+    #[serde(default)]
+    pub waypoints: Vec<Vec<f64>>,
     /// Sinusoidal components.
     #[serde(default)]
     pub sines: Vec<SineSpec>,
@@ -360,7 +371,8 @@ pub struct Scenario {
     pub seed: Option<u64>,
     /// The arm.
     pub arm: ArmSpec,
-    /// The desired trajectory.
+    /// The desired trajectory (default: hold the middle of the joint limits).
+    #[serde(default)]
     pub trajectory: TrajectorySpec,
     /// The plant (true arm, friction, deadzone, environment, sensors, rates).
     #[serde(default)]

@@ -23,21 +23,49 @@ impl Scenario {
                 .hint("metrics are computed over [evaluation_start, duration]"),
             );
         }
-        if self.trajectory.offset.len() != joints.len() {
-            out.push(
-                Invalid::new(
-                    "trajectory.offset",
-                    format!(
-                        "has {} values, the arm has {} joints",
-                        self.trajectory.offset.len(),
-                        joints.len()
-                    ),
-                )
-                .hint(format!("one value per joint: {}", joints.join(", "))),
-            );
+        let n = joints.len();
+        if let Some(offset) = &self.trajectory.offset {
+            if offset.len() != n {
+                out.push(
+                    Invalid::new(
+                        "trajectory.offset",
+                        format!("has {} values, the arm has {n} joints", offset.len()),
+                    )
+                    .hint(format!("one value per joint: {}; or leave `offset` out for the middle of the joint limits", joints.join(", "))),
+                );
+            }
+            if offset.iter().any(|v| !v.is_finite()) {
+                out.push(Invalid::new("trajectory.offset", "must be finite"));
+            }
+            if !self.trajectory.waypoints.is_empty() {
+                out.push(Invalid::new(
+                    "trajectory.waypoints",
+                    "give either `offset` or `waypoints`, not both",
+                ));
+            }
         }
-        if self.trajectory.offset.iter().any(|v| !v.is_finite()) {
-            out.push(Invalid::new("trajectory.offset", "must be finite"));
+        let mut previous = f64::NEG_INFINITY;
+        for (k, w) in self.trajectory.waypoints.iter().enumerate() {
+            let key = format!("trajectory.waypoints.{k}");
+            if w.len() != n + 1 {
+                out.push(
+                    Invalid::new(&key, format!("has {} values; a waypoint is [t, then one angle per joint] ({} values)", w.len(), n + 1))
+                        .hint(format!("joints: {}", joints.join(", "))),
+                );
+                continue;
+            }
+            if w.iter().any(|v| !v.is_finite()) {
+                out.push(Invalid::new(&key, "must be finite"));
+            } else if w[0] <= previous {
+                out.push(Invalid::new(
+                    &key,
+                    format!(
+                        "its time {} s is not after the previous waypoint's ({previous} s)",
+                        w[0]
+                    ),
+                ));
+            }
+            previous = w[0];
         }
         for (k, s) in self.trajectory.sines.iter().enumerate() {
             let key = format!("trajectory.sines.{k}");
