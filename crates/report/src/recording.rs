@@ -322,12 +322,21 @@ mod tests {
     fn groups_columns_into_channels() {
         let t = Table::from_columns(
             [
-                "t", "q.a", "q.b", "q_d.a", "q_d.b", "ee_error", "nodes.f", "zeta.a",
+                "t",
+                "q.a",
+                "q.b",
+                "q_d.a",
+                "q_d.b",
+                "ee_error",
+                "nodes.f",
+                "zeta.a",
+                "f_hand.x",
+                "f_hand_hat.x",
             ]
             .iter()
             .map(|s| s.to_string())
             .collect(),
-            vec![vec![0.0, 0.5]; 8],
+            vec![vec![0.0, 0.5]; 10],
         );
         let ch = channels("v", &t);
         let topics: Vec<&str> = ch.iter().map(|c| c.topic.as_str()).collect();
@@ -337,6 +346,7 @@ mod tests {
                 "/v/joint_state",
                 "/v/reference",
                 "/v/nodes",
+                "/v/hand",
                 "/v/zeta",
                 "/v/scalars"
             ]
@@ -345,7 +355,10 @@ mod tests {
         message(&ch[0], &t, 1, 0.5, &mut s);
         let v: serde_json::Value = serde_json::from_str(&s).unwrap();
         assert_eq!(v["q"]["b"], 0.5);
-        message(&ch[4], &t, 0, 0.0, &mut s);
+        message(&ch[3], &t, 1, 0.5, &mut s);
+        let v: serde_json::Value = serde_json::from_str(&s).unwrap();
+        assert_eq!(v["f_hand_hat"]["x"], 0.5);
+        message(&ch[5], &t, 0, 0.0, &mut s);
         let v: serde_json::Value = serde_json::from_str(&s).unwrap();
         assert_eq!(v["ee_error"], 0.0);
         for c in &ch {

@@ -181,13 +181,17 @@ fn fig8(folder: &RunFolder) -> Result<Figure, String> {
 fn errors(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result<Figure, String> {
     let (j, s) = joint0(folder)?;
     let (va, vb) = (variant(folder, with)?, variant(folder, without)?);
+    let from = folder.evaluation_start();
+    let mut p = panel(
+        format!("joint {s}; y axis fitted to t ≥ {from} s (evaluation window)"),
+        "tracking error (rad)",
+        vec![error_line(vb, j, 0, false)?, error_line(va, j, 1, true)?],
+    );
+    // Like Fig 8: the start-up transient would flatten the steady error.
+    p.y_fit_from = Some(from);
     Ok(figure(
         format!("Fig. {number}: tracking errors of joint {s} with/without NN compensation"),
-        vec![panel(
-            format!("joint {s}"),
-            "tracking error (rad)",
-            vec![error_line(vb, j, 0, false)?, error_line(va, j, 1, true)?],
-        )],
+        vec![p],
     ))
 }
 

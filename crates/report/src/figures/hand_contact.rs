@@ -102,6 +102,10 @@ fn distances(
         .collect())
 }
 
+fn vector(v: [f64; 3]) -> String {
+    format!("[{}]", v.map(crate::number::setting).join(", "))
+}
+
 fn wall_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure, String> {
     let mut panels = Vec::new();
     for v in variants {
@@ -140,17 +144,17 @@ fn wall_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure, Stri
         ));
         let mut p = panel(
             format!(
-                "variant {}: distance from the wall through {:?} with normal {:?}{}",
+                "variant {}: signed distance from the wall through {} with normal {}{}, > 0 in free space",
                 v.name,
-                wall.point,
-                wall.normal,
+                vector(wall.point),
+                vector(wall.normal),
                 if walls.len() > 1 {
                     " (the first wall)"
                 } else {
                     ""
                 }
             ),
-            "distance (m), > 0 in free space",
+            "distance (m)",
             lines,
         );
         p.hlines.push(Marker {
@@ -163,38 +167,34 @@ fn wall_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure, Stri
     Ok(compared("Hand path against the wall", panels))
 }
 
+/// H3: how far the admittance model moved each joint's reference, `q_r - q_d`.
 fn references_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure, String> {
-    let first = variants.first().ok_or("no variant has the hand columns")?;
+    let offset = |v: &Variant, j: &str| -> Result<Vec<f64>, String> {
+        let d = joint_col(v, columns::DESIRED, j)?;
+        let r = joint_col(v, columns::REFERENCE, j)?;
+        Ok(r.iter().zip(d).map(|(a, b)| a - b).collect())
+    };
     let departs = |j: &str| {
-        variants.iter().any(|v| {
-            let (Ok(d), Ok(r)) = (
-                joint_col(v, columns::DESIRED, j),
-                joint_col(v, columns::REFERENCE, j),
-            ) else {
-                return false;
-            };
-            d.iter().zip(r).any(|(a, b)| (a - b).abs() > STILL)
-        })
+        variants
+            .iter()
+            .any(|v| offset(v, j).is_ok_and(|o| o.iter().any(|x| x.abs() > STILL)))
     };
     let mut panels: Vec<Panel> = Vec::new();
     for j in folder.joints.iter().filter(|j| departs(j)) {
-        let mut lines = vec![dashed(
-            "desired q_d",
-            time(first)?,
-            joint_col(first, columns::DESIRED, j)?,
-            0,
-        )];
+        let mut lines = Vec::new();
         for (k, v) in variants.iter().enumerate() {
             lines.push(line(
-                format!("compliant q_r, {}", v.name),
+                format!("q_r - q_d, {}", v.name),
                 time(v)?,
-                joint_col(v, columns::REFERENCE, j)?,
+                &offset(v, j)?,
                 VARIANT_COLORS[k % VARIANT_COLORS.len()],
-                true,
+                k > 0,
             ));
         }
-        let mut p = panel(format!("joint {}", short(j)), "angle (rad)", lines);
-        p.spans = hand_contact_spans(first);
+        let mut p = panel(format!("joint {}", short(j)), "q_r - q_d (rad)", lines);
+        if let Some(first) = variants.first() {
+            p.spans = hand_contact_spans(first);
+        }
         panels.push(p);
     }
     if panels.is_empty() {
@@ -203,7 +203,7 @@ fn references_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure
         ));
     }
     Ok(super::common::figure(
-        "Joint references made by the admittance model (joints whose q_r departs from q_d)",
+        "Joint references: how far the admittance model moved them from q_d",
         panels,
     ))
 }
@@ -229,8 +229,8 @@ pub fn plan(folder: &RunFolder) -> Vec<Planned> {
         extra(
             "H3",
             "h3_joint_references",
-            "The joint references made by the admittance model from the estimated force (not in the paper).",
-            "q_d.JOINT (dashed) and q_r.JOINT of every variant, joints whose q_r departs from q_d",
+            "The joint references made by the admittance model from the estimated force: their offset from the desired trajectory (not in the paper).",
+            "q_r.JOINT - q_d.JOINT of every variant, joints whose q_r departs from q_d",
             references_figure(folder, &variants),
         ),
     ]

@@ -26,6 +26,8 @@ pub enum Run {
 
 /// The learned observer of the paper, shown first where one variant is chosen.
 const LEARNED: &str = "learned";
+/// Fig 15's y axes are sized to the samples after this start-up time of the filters (s).
+const FILTER_START: f64 = 1.0;
 
 fn all_joints_panel(
     folder: &RunFolder,
@@ -126,7 +128,7 @@ fn validation_figure(folder: &RunFolder) -> Result<Figure, String> {
                 .col(&c)
                 .ok_or(format!("column `{c}` is not in {file}"))
         };
-        panels.push(panel(
+        let mut p = panel(
             format!("joint {j}, variant {name}"),
             "torque (N m)",
             vec![
@@ -145,7 +147,10 @@ fn validation_figure(folder: &RunFolder) -> Result<Figure, String> {
                     true,
                 ),
             ],
-        ));
+        );
+        // The filters' start-up spike of the first samples would flatten the rest.
+        p.y_fit_from = t.first().map(|t0| t0 + FILTER_START);
+        panels.push(p);
     }
     Ok(figure(
         "Fig. 15: the observer's network on the validation data",

@@ -487,8 +487,15 @@ fn task_space_runs_get_the_hand_contact_figures() {
         actual.y[3]
     );
     assert_eq!(h2.panels[0].hlines[0].at, 0.0);
-    // H3: only the joints whose q_r departs from q_d (all of them in this table).
-    assert_eq!(figure_of(&plan, "H3").panels.len(), J.len());
+    // H3: q_r - q_d, only the joints whose q_r departs from q_d (all of them here).
+    let h3 = figure_of(&plan, "H3");
+    assert_eq!(h3.panels.len(), J.len());
+    let v = f.variant("learned").unwrap();
+    let (r, d) = (
+        v.table.col("q_r.left_s1").unwrap(),
+        v.table.col("q_d.left_s1").unwrap(),
+    );
+    assert_eq!(h3.panels[1].lines[0].y[4], r[4] - d[4]);
     // Without a wall: H2 says why.
     let f = folder_with("hand_contact", &[("learned", hand_table(20))], "");
     let plan = super::plan(&f, Err("unused".into()));

@@ -462,7 +462,7 @@ pub fn finish(p: &Panel, g: Gathered, yr: (f64, f64)) -> Prepared {
         if let Some(peak) = beyond.map(|(_, y)| y.abs()).reduce(f64::max) {
             notes.push(Note {
                 text: format!(
-                    "the y axis fits t ≥ {from} s; earlier samples beyond it (up to |y| = {peak:.3e}) are clipped"
+                    "the y axis fits t ≥ {from} s; earlier samples beyond it (up to |y| = {}) are clipped", crate::number::short(peak)
                 ),
                 left_out: false,
             });
