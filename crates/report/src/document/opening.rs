@@ -11,6 +11,14 @@ use crate::figures::short_name;
 use crate::folder::{RunFolder, Variant};
 use crate::number::setting;
 
+/// The metrics the warnings read; a summary without them could not be checked.
+const CHECKED: [&str; 4] = [
+    m::DIVERGED,
+    m::Q_LIMIT_VIOLATION_FRACTION,
+    m::TORQUE_SATURATION_FRACTION,
+    m::ESTIMATE_SATURATION_FRACTION,
+];
+
 /// A headline row: quantity, the paper's value, this run's, whether they agree.
 type Row = [String; 4];
 
@@ -416,7 +424,28 @@ pub fn blocks(folder: &RunFolder, warnings: Vec<String>) -> Vec<Block<'static>> 
         });
     }
     if warnings.is_empty() {
-        out.push(Block::Paragraph("No warnings: no divergence, limit, saturation or fault was recorded, every metric is finite and every sample was drawn.".into()));
+        let mut text = "No warnings: no divergence, limit, saturation or fault was recorded, every metric is finite and every sample was drawn.".to_string();
+        let missing: Vec<&str> = CHECKED
+            .iter()
+            .copied()
+            .filter(|name| {
+                folder
+                    .variants
+                    .iter()
+                    .all(|v| !v.metrics.contains_key(*name))
+            })
+            .collect();
+        if !missing.is_empty() {
+            text.push_str(&format!(
+                " This summary does not have {} (a run folder written before them, or a plant that does not report them), so those were not checked.",
+                missing
+                    .iter()
+                    .map(|n| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        out.push(Block::Paragraph(text));
     } else {
         out.push(Block::Warnings(warnings));
     }

@@ -89,6 +89,11 @@ fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
     assert!(top.contains("×0.75"), "the s0 ratio 0.0015 / 0.002: {top}");
     assert!(top.contains("| yes |"), "{top}");
     assert!(top.contains("No warnings"), "{top}");
+    // Metrics this summary lacks are named: they could not be checked.
+    assert!(
+        top.contains("does not have `torque_saturation_fraction`, `estimate_saturation_fraction`"),
+        "{top}"
+    );
     assert!(!top.contains("Warning:"), "{top}");
 }
 
