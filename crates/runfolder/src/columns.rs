@@ -43,6 +43,8 @@ pub const F_TRUE: &str = "f";
 pub const F_ESTIMATE: &str = "f_hat";
 /// With the neural controller: node count of the f network, one column.
 pub const NODES_F: &str = "nodes.f";
+/// Prefix of the node-count columns, `nodes.NETWORK` (e.g. [`NODES_F`]).
+pub const NODES: &str = "nodes";
 
 /// Task-space runs (a Cartesian admittance or a hand contact): the true force of the
 /// environment on the hand (N), columns `f_hand.x`, `f_hand.y`, `f_hand.z`.
@@ -72,6 +74,20 @@ pub const NODE_WEIGHT_PREFIX: &str = "w.";
 pub fn joint(prefix: &str, joint: &str) -> String {
     format!("{prefix}.{joint}")
 }
+
+/// `PREFIX.AXIS` of a hand column (`f_hand.x`); `axis` is one of [`AXES`].
+pub fn axis(prefix: &str, axis: &str) -> String {
+    format!("{prefix}.{axis}")
+}
+
+/// The hand signals of a task-space run, in the order they are written.
+pub const HAND: [&str; 5] = [
+    HAND_FORCE,
+    HAND_FORCE_ESTIMATE,
+    HAND_POSITION,
+    HAND_REFERENCE,
+    HAND_DESIRED,
+];
 
 /// `PREFIX.JOINT` for every joint, in order.
 pub fn per_joint<'a>(prefix: &'a str, joints: &'a [String]) -> impl Iterator<Item = String> + 'a {
