@@ -80,7 +80,7 @@ fn learned_variants_train_validate_cache_and_estimate() {
         assert_eq!(v.len(), 7);
         // The network on the validation data (Fig 15): 12 s at 1 kHz, every 10th sample.
         let series = r.observer_validation.as_ref().expect("validation series");
-        assert_eq!(series.columns.len(), 1 + 2 * 7);
+        assert_eq!(series.columns.len(), 1 + 3 * 7);
         assert_eq!(series.rows.len(), 1200);
         assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0), "{v:?}");
     }

@@ -74,10 +74,13 @@ fn validation_series(
     y: &[f64],
     joints: &[String],
 ) -> Option<TimeSeries> {
+    use admittance_runfolder::columns as col;
     let n = joints.len();
-    let mut columns = vec!["t".to_string()];
-    columns.extend(joints.iter().map(|j| format!("target.{j}")));
-    columns.extend(joints.iter().map(|j| format!("prediction.{j}")));
+    let mut columns = vec![col::TIME.to_string()];
+    columns.extend(col::per_joint(col::VALIDATION_TARGET, joints));
+    columns.extend(col::per_joint(col::VALIDATION_PREDICTION, joints));
+    // The angles too: Fig 14 draws the validation trajectory from them.
+    columns.extend(col::per_joint(col::POSITION, joints));
     let mut ws = model.workspace();
     let mut out = vec![0.0; n];
     let mut rows = Vec::with_capacity(t.len() / VALIDATION_DECIMATION + 1);
@@ -85,10 +88,11 @@ fn validation_series(
         model
             .predict_into(&x[3 * n * k..3 * n * (k + 1)], &mut out, &mut ws)
             .ok()?;
-        let mut row = Vec::with_capacity(1 + 2 * n);
+        let mut row = Vec::with_capacity(1 + 3 * n);
         row.push(t[k]);
         row.extend_from_slice(&y[n * k..n * (k + 1)]);
         row.extend_from_slice(&out);
+        row.extend_from_slice(&x[3 * n * k..3 * n * k + n]);
         rows.push(row);
     }
     Some(TimeSeries { columns, rows })
