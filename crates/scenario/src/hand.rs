@@ -2,11 +2,36 @@
 //! against the estimate `J^{+T} tau_ext_hat`, the hand's path, and how closely it follows
 //! the oracle's (docs/outputs.md, "Hand metrics").
 
+use admittance_dynamics::{forward_kinematics, Data, Model};
 use admittance_runfolder::columns;
 
 use crate::metrics::HandMetrics;
 use crate::runner::VariantRun;
 use crate::series::TimeSeries;
+
+/// Forward kinematics of the hand (the model's tip frame) for the hand error and the
+/// hand columns.
+pub(crate) struct HandKinematics {
+    data: Data,
+    tip: usize,
+}
+
+impl HandKinematics {
+    /// For `model`'s tip frame.
+    pub fn new(model: &Model) -> Self {
+        Self {
+            data: Data::new(model),
+            tip: model.tip_frame,
+        }
+    }
+
+    /// The hand's position (m, base frame) at `q`.
+    pub fn position(&mut self, model: &Model, q: &[f64]) -> [f64; 3] {
+        let _ = forward_kinematics(model, &mut self.data, q);
+        let p = self.data.frame_placements[self.tip].translation;
+        [p.x, p.y, p.z]
+    }
+}
 
 /// Per-step sums of the hand metrics over the evaluation window.
 #[derive(Default)]

@@ -6,8 +6,27 @@ use crate::error::Invalid;
 
 impl Scenario {
     /// Checks what serde cannot: signs, ranges, names. `joints` are the model's joint names.
+    /// Every problem is returned, each at its key.
     pub fn validate(&self, joints: &[String]) -> Vec<Invalid> {
         let mut out = Vec::new();
+        self.validate_times(&mut out);
+        self.validate_trajectory(joints, &mut out);
+        self.validate_controller(&mut out);
+        self.validate_dynamic_nodes(&mut out);
+        self.validate_observer(&mut out);
+        if self.task_admittance.is_some() && self.admittance.as_ref().is_some_and(|a| a.enabled) {
+            out.push(
+                Invalid::new("task_admittance", "a scenario has one admittance model: [admittance] (joint space) or [task_admittance] (the hand), not both")
+                    .hint("remove one of the two tables, or set admittance.enabled = false"),
+            );
+        }
+        if self.output.decimation == 0 {
+            out.push(Invalid::new("output.decimation", "must be at least 1"));
+        }
+        out
+    }
+
+    fn validate_times(&self, out: &mut Vec<Invalid>) {
         if !(self.duration.is_finite() && self.duration > 0.0) {
             out.push(Invalid::new(
                 "duration",
@@ -23,6 +42,9 @@ impl Scenario {
                 .hint("metrics are computed over [evaluation_start, duration]"),
             );
         }
+    }
+
+    fn validate_trajectory(&self, joints: &[String], out: &mut Vec<Invalid>) {
         let n = joints.len();
         if let Some(offset) = &self.trajectory.offset {
             if offset.len() != n {
@@ -91,6 +113,9 @@ impl Scenario {
                 ));
             }
         }
+    }
+
+    fn validate_controller(&self, out: &mut Vec<Invalid>) {
         match self.controller.kind {
             ControllerKind::Pd if self.controller.pd.is_none() => out.push(
                 Invalid::new(
@@ -106,6 +131,9 @@ impl Scenario {
                 )),
             _ => {}
         }
+    }
+
+    fn validate_dynamic_nodes(&self, out: &mut Vec<Invalid>) {
         if let Some(d) = &self.dynamic_nodes {
             if self.controller.kind != ControllerKind::Neural {
                 out.push(Invalid::new(
@@ -156,6 +184,9 @@ impl Scenario {
                 );
             }
         }
+    }
+
+    fn validate_observer(&self, out: &mut Vec<Invalid>) {
         if !(self.observer.nominal_inertia_scale.is_finite()
             && self.observer.nominal_inertia_scale > 0.0)
         {
@@ -232,15 +263,5 @@ impl Scenario {
                 }
             }
         }
-        if self.task_admittance.is_some() && self.admittance.as_ref().is_some_and(|a| a.enabled) {
-            out.push(
-                Invalid::new("task_admittance", "a scenario has one admittance model: [admittance] (joint space) or [task_admittance] (the hand), not both")
-                    .hint("remove one of the two tables, or set admittance.enabled = false"),
-            );
-        }
-        if self.output.decimation == 0 {
-            out.push(Invalid::new("output.decimation", "must be at least 1"));
-        }
-        out
     }
 }
