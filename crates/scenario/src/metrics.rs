@@ -262,3 +262,53 @@ impl ObserverStats {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every metric the writer can produce is in the run-folder contract, which the report
+    /// reads its units and windows from.
+    #[test]
+    fn every_metric_is_in_the_run_folder_contract() {
+        let full = VariantMetrics {
+            diverged_at: Some(1.0),
+            external_torque_nrmse: Some(0.5),
+            admittance_error_rms: Some(vec![0.0]),
+            observer_training: Some(ObserverTrainingMetrics {
+                train_seconds: 1.0,
+                observer_nodes: 1,
+                validation_nrmse: vec![0.1],
+                observer_model_cached: false,
+                training_samples: 1,
+                observer_lambda: 1e-3,
+            }),
+            weight_norm_final: Some(BTreeMap::new()),
+            dynamic_nodes: Some(DynamicNodeMetrics {
+                approx_rmse_full: 1.0,
+                approx_rmse_after_discard: 1.0,
+                approx_rmse_after_growth: 1.0,
+                nodes_discarded: 1,
+                nodes_added: 1,
+                weight_norm_max: 1.0,
+            }),
+            hand: Some(HandMetrics {
+                wrench_estimate_rmse: Some(1.0),
+                wrench_estimate_nrmse: Some(0.1),
+                false_force_rms: 0.1,
+                contact_force_max: 1.0,
+                hand_compliance_error_rms: Some(0.0),
+                hand_drift_after_release: Some(0.0),
+            }),
+            ..VariantMetrics::default()
+        };
+        let keys = full.to_map();
+        assert!(keys.len() > 40, "{}", keys.len());
+        for key in keys.keys() {
+            assert!(
+                admittance_runfolder::metrics::info(key).is_some(),
+                "`{key}` is written but not in admittance_runfolder::metrics"
+            );
+        }
+    }
+}
