@@ -1,56 +1,28 @@
 //! The library in a 1 kHz control loop: the paper's neural controller tracking a compliant
 //! reference from the admittance model, driven by a momentum observer's external-torque
-//! estimate. Everything is built once; each tick only calls `update`/`step`, which never
-//! allocate and never panic.
+//! estimate. The wiring of one period is `admittance_scenario::ClosedLoop`, the same code
+//! the scenario runner and the Python package step. Everything is built once; each tick
+//! calls `Sensors::sample` and `ClosedLoop::step`, which never allocate and never panic.
 //!
-//! The "robot" here is a stand-in (the rigid-body model integrated with semi-implicit Euler,
-//! a push of 2 N m on s0 from 1 s to 2 s); on a real arm, `read_encoders` and
-//! `send_torques` talk to its driver.
+//! The "robot" here is the project's simulated Baxter arm (`admittance_sim::Plant`) with a
+//! push of 2 N m on s0 from 1 s to 2 s; on a real arm, its driver's encoder reading goes
+//! into `Sensors::sample` (built with zero noise and resolution, it is only the signal
+//! chain: low-pass, differentiation) and `ClosedLoop::torque` goes to its torque interface.
 //!
 //! Run: `cargo run --release -p admittance-cli --example control_loop`
 
 use std::sync::Arc;
 
 use admittance_control::{
-    Admittance, AdmittanceConfig, AdmittanceInput, ControlInput, Controller, MomentumObserver,
-    MomentumObserverConfig, NeuralController, NeuralControllerConfig, Observer, ObserverInput,
-    StepStatus,
+    Admittance, AdmittanceConfig, JointValues, MomentumObserver, MomentumObserverConfig,
+    NeuralController, NeuralControllerConfig, StepStatus,
 };
-use admittance_dynamics::{aba, Data, Model};
-
-/// A stand-in for the arm: integrates the model under the commanded torque.
-struct SimulatedArm {
-    model: Arc<Model>,
-    data: Data,
-    q: Vec<f64>,
-    qdot: Vec<f64>,
-    /// Work buffer: the commanded torque plus the push.
-    total: Vec<f64>,
-}
-
-impl SimulatedArm {
-    fn read_encoders(&self) -> (&[f64], &[f64]) {
-        (&self.q, &self.qdot)
-    }
-
-    fn send_torques(&mut self, tau: &[f64], push: &[f64], dt: f64) {
-        for ((t, a), b) in self.total.iter_mut().zip(tau).zip(push) {
-            *t = a + b;
-        }
-        if let Ok(qddot) = aba(
-            &self.model,
-            &mut self.data,
-            &self.q,
-            &self.qdot,
-            &self.total,
-        ) {
-            for i in 0..self.q.len() {
-                self.qdot[i] += dt * qddot[i];
-                self.q[i] += dt * self.qdot[i];
-            }
-        }
-    }
-}
+use admittance_dynamics::Model;
+use admittance_scenario::{
+    ClosedLoop, Compliance, EstimateSource, EstimateToController, LoopController, LoopInput,
+    LoopParts, ObserverStage,
+};
+use admittance_sim::{JointTorqueProfileConfig, Plant, PlantConfig, SensorConfig, Sensors};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let urdf = concat!(
@@ -64,78 +36,89 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?);
     let n = model.nq();
     let dt = 1e-3; // 1 kHz
-
-    // Built once, before the loop.
-    let mut controller = NeuralController::new(model.clone(), &NeuralControllerConfig::default())?;
-    let mut admittance = Admittance::new(n, &AdmittanceConfig::paper())?;
-    let mut observer = MomentumObserver::new(model.clone(), &MomentumObserverConfig::default())?;
     let pose = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
-    let (zero, mut tau, mut tau_ext_hat) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut qddot_estimate = vec![0.0; n];
-    let mut arm = SimulatedArm {
-        data: Data::new(&model),
-        model: model.clone(),
-        q: pose.to_vec(),
-        qdot: zero.clone(),
-        total: zero.clone(),
+
+    // The stand-in robot: true dynamics at 5 kHz, a person pushing s0 from 1 s to 2 s.
+    let mut robot_config = PlantConfig {
+        initial_q: pose.to_vec(),
+        ..PlantConfig::default()
     };
-    let mut qdot_before = zero.clone();
-    let mut q_d = pose.to_vec();
-    let mut qdot_d = zero.clone();
-    let mut qddot_d = zero.clone();
-    let mut push = zero.clone();
+    robot_config.spring.enabled = true; // Baxter's s1 counterbalance
+    robot_config
+        .environment
+        .joint_torque_profiles
+        .push(JointTorqueProfileConfig {
+            joint: "left_s0".into(),
+            points: vec![[0.0, 2.0]],
+            t_start: 1.0,
+            t_end: 2.0,
+        });
+    let mut robot = Plant::new(&model, &robot_config)?;
+
+    // Built once, before the loop: the signal chain, the controller, the admittance model
+    // and the observer, wired by the closed loop.
+    let signals = SensorConfig {
+        filter_cutoff_hz: 40.0,
+        ..SensorConfig::default()
+    };
+    let mut sensors = Sensors::new(&model, &signals, 1.0 / dt)?;
+    // K2 per joint (the wrist's inertia is small), as in scenarios/deadzone.toml.
+    let controller_config = NeuralControllerConfig {
+        k2: JointValues::PerJoint(vec![20.0, 30.0, 15.0, 10.0, 2.0, 2.0, 0.2]),
+        ..NeuralControllerConfig::default()
+    };
+    let observer = MomentumObserver::new(model.clone(), &MomentumObserverConfig::default())?;
+    let mut closed_loop = ClosedLoop::new(LoopParts {
+        controller: LoopController::Neural(Box::new(NeuralController::new(
+            model.clone(),
+            &controller_config,
+        )?)),
+        admittance: Some(Compliance::Joint(Admittance::new(
+            n,
+            &AdmittanceConfig::paper(),
+        )?)),
+        estimate: EstimateSource::Observer(Box::new(ObserverStage::new(
+            Box::new(observer),
+            None,  // no second conditioning stage
+            false, // the observer gets the filtered command of this period
+            5.0,   // estimate low-passed at 5 Hz
+            0.5,   // held at zero for the first 0.5 s (the filters start up)
+            dt,
+        ))),
+        // The momentum observer's estimate acts through the admittance model only: passed
+        // into the law as well it closes a loop through the command it is computed from
+        // (docs/experiments.md measures both).
+        estimate_to_controller: EstimateToController::OnlyWithoutAdmittance,
+        dt,
+    });
+    let (mut q_d, mut qdot_d, mut qddot_d) = (pose.to_vec(), vec![0.0; n], vec![0.0; n]);
+    let no_truth = vec![0.0; n]; // a real robot does not know the true external torque
 
     for tick in 0..3000 {
         let time = tick as f64 * dt;
         // The desired motion: s0 = 0.3 sin(t).
         (q_d[0], qdot_d[0], qddot_d[0]) = (0.3 * time.sin(), 0.3 * time.cos(), -0.3 * time.sin());
-        let (q, qdot) = arm.read_encoders();
-
-        // External-torque estimate from the measured state and the last command.
-        let input = ObserverInput {
+        // Every 1 ms: read the encoders, step the loop, send the torque.
+        let measurement = sensors.sample(time, robot.q(), closed_loop.torque())?;
+        let status = closed_loop.step(&LoopInput {
             time,
-            q,
-            qdot,
-            qddot: &qddot_estimate,
-            tau_commanded: &tau,
-        };
-        if let StepStatus::Fault(f) = observer.update(&input, dt, &mut tau_ext_hat) {
-            eprintln!("observer fault at {time:.3} s: {f:?}");
-        }
-        // Compliant reference q_r from the admittance model.
-        let input = AdmittanceInput {
             q_d: &q_d,
             qdot_d: &qdot_d,
             qddot_d: &qddot_d,
-            external_torque_estimate: &tau_ext_hat,
-        };
-        if let StepStatus::Fault(f) = admittance.step(&input, dt) {
-            eprintln!("admittance fault at {time:.3} s: {f:?} (reference held)");
-        }
-        // The controller tracks q_r.
-        let input = ControlInput {
-            time,
-            q,
-            qdot,
-            q_ref: admittance.q_r(),
-            qdot_ref: admittance.qdot_r(),
-            qddot_ref: admittance.qddot_r(),
-            external_torque_estimate: &tau_ext_hat,
-        };
-        if let StepStatus::Fault(f) = controller.step(&input, dt, &mut tau) {
+            measurement,
+            true_external_torque: &no_truth,
+        });
+        if let StepStatus::Fault(f) = status.controller {
             eprintln!("controller fault at {time:.3} s: {f:?} (safe hold applied)");
         }
-
-        push[0] = if (1.0..2.0).contains(&time) { 2.0 } else { 0.0 };
-        qdot_before.copy_from_slice(&arm.qdot);
-        arm.send_torques(&tau, &push, dt);
-        for i in 0..n {
-            qddot_estimate[i] = (arm.qdot[i] - qdot_before[i]) / dt;
-        }
+        robot.step_control(closed_loop.torque())?;
         if tick % 500 == 0 {
             println!(
                 "t = {time:.1} s  q_d[s0] = {:+.3}  q_r[s0] = {:+.3}  q[s0] = {:+.3}  tau_ext_hat[s0] = {:+.2} N m",
-                q_d[0], admittance.q_r()[0], arm.q[0], tau_ext_hat[0]
+                q_d[0],
+                closed_loop.q_r()[0],
+                robot.q()[0],
+                closed_loop.external_torque_estimate()[0]
             );
         }
     }

@@ -6,7 +6,7 @@ use std::io::IsTerminal;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use admittance_sim::scenario::{Progress, ProgressFn, Stage};
+use admittance_scenario::{Progress, ProgressFn, Stage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Whether progress should be drawn: not `--quiet` and stderr is a terminal.

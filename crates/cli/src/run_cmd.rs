@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use admittance_sim::scenario::{output::RunError, run_scenario, RunOptions};
+use admittance_scenario::{run_scenario, RunError, RunOptions};
 use clap::Args;
 
 use crate::progress::{self, RunProgress, Spinner};
@@ -13,9 +13,19 @@ use crate::CliError;
 pub struct RunArgs {
     /// Scenario file (TOML), e.g. scenarios/deadzone.toml.
     scenario: PathBuf,
-    /// Output folder (replaced atomically when the run completes).
+    /// Output folder: a new folder, an empty one, or one an earlier `admittance run` wrote
+    /// (replaced atomically when the run completes). Anything else is refused.
     #[arg(long)]
     out: PathBuf,
+    /// Replace --out even when it is a folder this tool did not write.
+    #[arg(long)]
+    force: bool,
+    /// Refuse a variant that needs more plant steps than this (duration x plant.rate_hz).
+    #[arg(long, value_name = "STEPS", default_value_t = admittance_scenario::Limits::default().max_plant_steps)]
+    max_plant_steps: f64,
+    /// Refuse a variant whose recorded time series would take more memory than this (GiB).
+    #[arg(long, value_name = "GIB", default_value_t = admittance_scenario::Limits::default().max_series_bytes / (1u64 << 30) as f64)]
+    max_series_gb: f64,
     /// Run only this variant.
     #[arg(long)]
     variant: Option<String>,
@@ -41,9 +51,23 @@ pub struct RunArgs {
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let show = progress::wanted(args.quiet);
     let bar = show.then(RunProgress::new);
+    for (flag, v) in [
+        ("--max-plant-steps", args.max_plant_steps),
+        ("--max-series-gb", args.max_series_gb),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(CliError::usage(format!(
+                "{flag} {v}: must be a finite number > 0"
+            )));
+        }
+    }
     let options = RunOptions {
         seed: args.seed,
         progress: bar.as_ref().map(RunProgress::callback),
+        limits: admittance_scenario::Limits {
+            max_plant_steps: args.max_plant_steps,
+            max_series_bytes: args.max_series_gb * (1u64 << 30) as f64,
+        },
     };
     let started = std::time::Instant::now();
     let report_options = admittance_report::Options {
@@ -63,6 +87,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         args.variant.as_deref(),
         &args.set,
         &options,
+        args.force,
         |_, k, total| {
             if let Some(b) = &bar {
                 b.variant_started(k, total);
@@ -83,12 +108,29 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     }
     let summary = result.map_err(|e| match e {
         RunError::Scenario(s) => CliError::input(s.to_string()),
+        RunError::Refused(message) => CliError::usage(message),
         RunError::Finish(message) => CliError { code: 1, message },
         io @ RunError::Io { .. } => CliError {
             code: 1,
             message: io.to_string(),
         },
     })?;
+    if !summary.failures.is_empty() {
+        if args.json {
+            crate::write_stdout(&format!(
+                "{}\n",
+                serde_json::to_string_pretty(&summary.json).unwrap_or_default()
+            ));
+        }
+        return Err(CliError {
+            code: 1,
+            message: format!(
+                "the run failed: {}; the run folder {} holds what ran (report.md says where it stopped)",
+                summary.failures.join("; "),
+                summary.out_dir.display()
+            ),
+        });
+    }
     if args.json {
         crate::write_stdout(&format!(
             "{}\n",

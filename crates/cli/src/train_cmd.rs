@@ -3,31 +3,43 @@
 //!
 //! Inputs `[q, qdot, qddot]`, targets `tau`. The last `--validation-fraction` of the rows
 //! (by time, default 20%) is held out: lambda is chosen on it (the broad module's grid) and
-//! the printed validation NRMSE is measured on it. `grow` needs the same data the model was
-//! trained on (the growth state is the factorisation of that data's Gram matrix).
+//! the printed validation NRMSE is measured on it. The model file records the arm (joint
+//! names, the URDF model's fingerprint) and every setting (docs/outputs.md, "Model
+//! files"); `grow` takes the settings from it and refuses another arm or data that are
+//! not the training data. Before any work: the arguments, `--out`, and the memory and work
+//! the fit needs (`--max-memory-gb`, `--max-tflop`) are checked.
 
-use std::path::{Path, PathBuf};
+mod args;
+mod data;
+
+use std::path::PathBuf;
 use std::time::Instant;
 
 use admittance_learning::broad::{
-    fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec,
+    check_budget, fit, ArmCheck, BroadConfig, BroadError, BroadModel, DataSettings, FitSize,
+    FrictionFeatures, GrowthSpec, TrainingTarget, ValidationSplit,
 };
-use admittance_sim::FreeMotionData;
 use clap::Args;
 
 use crate::progress::{self, Spinner};
 use crate::CliError;
+use args::{
+    arm_identity, check_out, learn_error, non_negative_hz, open_fraction, positive_count,
+    BudgetArgs, OptionalArmArgs,
+};
 
 #[derive(Args)]
 pub struct TrainArgs {
-    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J).
+    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; any column order, extra
+    /// columns ignored).
     #[arg(long)]
     data: PathBuf,
-    /// The arm (`--urdf`, `--base`, `--tip`): the data's joints must be its joints, in chain order.
+    /// The arm (`--urdf`, `--base`, `--tip`): the data must hold its joints' columns; the
+    /// model file records its joint names and model fingerprint.
     #[command(flatten)]
     chain: crate::dynamics_cmd::ChainArgs,
-    /// Enhancement (Gaussian) nodes L.
-    #[arg(long, default_value_t = 1000)]
+    /// Enhancement (Gaussian) nodes L (at most the training rows).
+    #[arg(long, default_value_t = 1000, value_parser = positive_count, allow_negative_numbers = true)]
     nodes: usize,
     /// Add friction-shaped inputs tanh(qdot / v) (METHOD.md section 7).
     #[arg(long)]
@@ -35,15 +47,17 @@ pub struct TrainArgs {
     /// Second low-pass (Hz) on q and tau before differentiating again, the observer input
     /// conditioning of the scenarios (`observer.input_filter_hz`); 0: the columns as recorded.
     /// The observer must be fed the same conditioning at run time (`admittance_sim::InputConditioner`).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
     input_filter_hz: f64,
     /// Fraction of the rows, at the end, held out for validation.
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = 0.2, value_parser = open_fraction, allow_negative_numbers = true)]
     validation_fraction: f64,
     /// Seed of the centre placement.
     #[arg(long)]
     seed: Option<u64>,
-    /// Model file to write.
+    #[command(flatten)]
+    budget: BudgetArgs,
+    /// Model file to write: a new name or a model file (anything else is refused).
     #[arg(long)]
     out: PathBuf,
     /// No progress output on stderr.
@@ -57,62 +71,32 @@ pub struct GrowArgs {
     #[arg(long)]
     model: PathBuf,
     /// Nodes to add.
-    #[arg(long)]
+    #[arg(long, value_parser = positive_count, allow_negative_numbers = true)]
     nodes: usize,
     /// The free-motion data the model was trained on.
     #[arg(long)]
     data: PathBuf,
-    /// The validation fraction used by `train`.
-    #[arg(long, default_value_t = 0.2)]
-    validation_fraction: f64,
-    /// The input filter used by `train`.
-    #[arg(long, default_value_t = 0.0)]
-    input_filter_hz: f64,
+    /// The validation fraction `train` used (default: the one recorded in the model file;
+    /// a different value is an error).
+    #[arg(long, value_parser = open_fraction, allow_negative_numbers = true)]
+    validation_fraction: Option<f64>,
+    /// The input filter `train` used (default: the one recorded in the model file; a
+    /// different value is an error).
+    #[arg(long, value_parser = non_negative_hz, allow_negative_numbers = true)]
+    input_filter_hz: Option<f64>,
+    #[command(flatten)]
+    arm: OptionalArmArgs,
     /// Seed of the new centres.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Model file to write.
+    #[command(flatten)]
+    budget: BudgetArgs,
+    /// Model file to write: a new name or a model file (the input model too).
     #[arg(long)]
     out: PathBuf,
     /// No progress output on stderr.
     #[arg(long)]
     quiet: bool,
-}
-
-fn load_split(
-    path: &Path,
-    fraction: f64,
-    input_filter_hz: f64,
-) -> Result<(FreeMotionData, Vec<f64>, Vec<f64>, usize), CliError> {
-    if !(fraction > 0.0 && fraction < 1.0) {
-        return Err(CliError::usage(format!(
-            "--validation-fraction is {fraction}, must be in (0, 1)"
-        )));
-    }
-    let data = FreeMotionData::load(path).map_err(|e| CliError::input(e.to_string()))?;
-    let train_rows = ((data.len() as f64) * (1.0 - fraction)).floor() as usize;
-    if train_rows < 2 || train_rows >= data.len() {
-        return Err(CliError::input(format!(
-            "{}: {} rows are too few to split for validation",
-            path.display(),
-            data.len()
-        )));
-    }
-    // `[q, qdot, qddot]` and `tau`, row-major, conditioned as at run time.
-    let (x, y) = admittance_sim::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
-        CliError::usage(format!(
-            "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
-            path.display()
-        ))
-    })?;
-    Ok((data, x, y, train_rows))
-}
-
-fn learn_err(e: impl std::fmt::Display) -> CliError {
-    CliError {
-        code: 1,
-        message: e.to_string(),
-    }
 }
 
 fn fmt_list(v: &[f64]) -> String {
@@ -122,29 +106,26 @@ fn fmt_list(v: &[f64]) -> String {
         .join(", ")
 }
 
-pub fn train(args: &TrainArgs) -> Result<(), CliError> {
-    let model = crate::dynamics_cmd::load(&args.chain)?;
-    let (data, x, y, train_rows) =
-        load_split(&args.data, args.validation_fraction, args.input_filter_hz)?;
-    let joints: Vec<&str> = model.joint_names().collect();
-    if data
-        .joints
-        .iter()
-        .map(String::as_str)
-        .ne(joints.iter().copied())
-    {
-        return Err(CliError::input(format!(
-            "{}: joints [{}] are not the arm's [{}] (chain order)",
-            args.data.display(),
-            data.joints.join(", "),
-            joints.join(", ")
-        )));
+/// Runs `work` with a spinner (or one line on stderr when that is not a terminal).
+fn with_progress<T>(quiet: bool, what: String, work: impl FnOnce() -> T) -> (T, f64) {
+    let show = progress::wanted(quiet);
+    if !quiet && !show {
+        eprintln!("{what} ...");
     }
+    let started = Instant::now();
+    let spinner = Spinner::start(show, what);
+    let out = work();
+    drop(spinner);
+    (out, started.elapsed().as_secs_f64())
+}
+
+pub fn train(args: &TrainArgs) -> Result<(), CliError> {
+    check_out(&args.out)?;
+    let arm = crate::dynamics_cmd::load(&args.chain)?;
+    let joints: Vec<String> = arm.joint_names().map(String::from).collect();
+    let data = data::load(&args.data, Some(&joints))?;
     let n = data.dof();
-    let train = Dataset::new(&x[..train_rows * 3 * n], &y[..train_rows * n], 3 * n, n)
-        .map_err(learn_err)?;
-    let validation = Dataset::new(&x[train_rows * 3 * n..], &y[train_rows * n..], 3 * n, n)
-        .map_err(learn_err)?;
+    let train_rows = data::training_rows(&args.data, &data, Some(args.validation_fraction))?;
     let mut config = BroadConfig {
         nodes: args.nodes,
         friction: if args.friction_features {
@@ -152,27 +133,41 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         } else {
             FrictionFeatures::none()
         },
+        budget: args.budget.budget(),
         ..BroadConfig::default()
     };
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    let what = format!(
-        "training on {} rows ({} held out), {} nodes",
+    let held_out = data.len() - train_rows;
+    let size = FitSize::fit(train_rows, held_out, 3 * n, n, &config);
+    let estimate = check_budget(&size, &config.budget).map_err(learn_error)?;
+    let (x, y) = data::arrays(&args.data, &data, args.input_filter_hz, None)?;
+    let (train, validation) = data::datasets(
+        &args.data,
+        &data,
+        (&x, &y),
         train_rows,
-        data.len() - train_rows,
-        args.nodes
+        args.input_filter_hz,
+    )?;
+    let what = format!(
+        "training on {train_rows} rows ({held_out} held out), {} nodes: {}",
+        args.nodes, estimate
     );
-    let show = progress::wanted(args.quiet);
-    if !args.quiet && !show {
-        eprintln!("{what} ...");
-    }
-    let started = Instant::now();
-    let spinner = Spinner::start(show, what);
-    let (net, report) = fit(&train, Some(&validation), &config).map_err(learn_err)?;
-    let seconds = started.elapsed().as_secs_f64();
-    drop(spinner);
-    net.save(&args.out).map_err(learn_err)?;
+    let (result, seconds) = with_progress(args.quiet, what, || {
+        fit(&train, validation.as_ref(), &config)
+    });
+    let (mut net, report) = result.map_err(learn_error)?;
+    net.set_arm(arm_identity(&arm)).map_err(learn_error)?;
+    net.set_data_settings(DataSettings {
+        input_filter_hz: args.input_filter_hz,
+        validation: ValidationSplit::TrailingFraction {
+            fraction: args.validation_fraction,
+        },
+        target: TrainingTarget::FreeMotionTorque,
+    })
+    .map_err(learn_error)?;
+    net.save(&args.out).map_err(learn_error)?;
     crate::write_stdout(&format!(
         "samples: {}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nwrote {}\n",
         report.samples,
@@ -187,10 +182,92 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The data settings of a growth: the model file's, which explicit flags must agree with;
+/// a model that records none (format version 1) takes the flags or their defaults, with a
+/// warning.
+fn grow_settings(args: &GrowArgs, net: &BroadModel) -> Result<DataSettings, CliError> {
+    let model = args.model.display();
+    let Some(recorded) = net.provenance().data else {
+        let settings = DataSettings {
+            input_filter_hz: args.input_filter_hz.unwrap_or(0.0),
+            validation: ValidationSplit::TrailingFraction {
+                fraction: args.validation_fraction.unwrap_or(0.2),
+            },
+            target: TrainingTarget::FreeMotionTorque,
+        };
+        eprintln!(
+            "admittance: warning: {model} records no training settings (format version 1): \
+             using --input-filter-hz {} and --validation-fraction {}; pass the values `train` used",
+            settings.input_filter_hz,
+            args.validation_fraction.unwrap_or(0.2)
+        );
+        return Ok(settings);
+    };
+    let mut differ = Vec::new();
+    if let Some(hz) = args.input_filter_hz {
+        if hz.to_bits() != recorded.input_filter_hz.to_bits() {
+            differ.push(format!(
+                "--input-filter-hz {hz}, but {model} was trained with --input-filter-hz {}",
+                recorded.input_filter_hz
+            ));
+        }
+    }
+    if let Some(f) = args.validation_fraction {
+        if (ValidationSplit::TrailingFraction { fraction: f }) != recorded.validation {
+            differ.push(format!(
+                "--validation-fraction {f}, but {model} was validated on {}",
+                recorded.validation
+            ));
+        }
+    }
+    if differ.is_empty() {
+        Ok(recorded)
+    } else {
+        Err(CliError::usage(format!(
+            "{}: drop the flag to use the model's setting",
+            differ.join("; ")
+        )))
+    }
+}
+
+/// The model's arm checked against `--urdf` (when given) and the joints to read from the
+/// data: the recorded ones, else the URDF's, else the file's `q.*` order.
+fn grow_joints(
+    args: &GrowArgs,
+    net: &BroadModel,
+    urdf: Option<&admittance_dynamics::Model>,
+) -> Result<Option<Vec<String>>, CliError> {
+    let model = args.model.display();
+    if let Some(arm) = urdf {
+        match net.check_arm(&arm_identity(arm)) {
+            Ok(ArmCheck::Matches) => {}
+            Ok(ArmCheck::Unrecorded) => eprintln!(
+                "admittance: warning: {model} records no arm (format version 1): not checked against --urdf"
+            ),
+            Err(e) => return Err(CliError::input(format!("{model}: {e}"))),
+        }
+    }
+    Ok(match (net.arm(), urdf) {
+        (Some(recorded), _) => Some(recorded.joints.clone()),
+        (None, Some(arm)) => Some(arm.joint_names().map(String::from).collect()),
+        (None, None) => None,
+    })
+}
+
 pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
+    check_out(&args.out)?;
     let mut net = BroadModel::load(&args.model).map_err(|e| CliError::input(e.to_string()))?;
-    let (data, x, y, train_rows) =
-        load_split(&args.data, args.validation_fraction, args.input_filter_hz)?;
+    let settings = grow_settings(args, &net)?;
+    let urdf = args.arm.load()?;
+    let joints = grow_joints(args, &net, urdf.as_ref())?;
+    let data = data::load(&args.data, joints.as_deref())?;
+    if let Err(e) = net.check_joints(&data.joints) {
+        return Err(CliError::input(format!(
+            "{} and {}: {e}",
+            args.model.display(),
+            args.data.display()
+        )));
+    }
     let n = data.dof();
     if net.d_in() != 3 * n || net.d_out() != n {
         return Err(CliError::input(format!(
@@ -201,33 +278,91 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
             n
         )));
     }
-    let train = Dataset::new(&x[..train_rows * 3 * n], &y[..train_rows * n], 3 * n, n)
-        .map_err(learn_err)?;
-    let validation = Dataset::new(&x[train_rows * 3 * n..], &y[train_rows * n..], 3 * n, n)
-        .map_err(learn_err)?;
-    let config = BroadConfig {
+    let nominal = match settings.target {
+        TrainingTarget::FreeMotionTorque => None,
+        TrainingTarget::NominalResidual {
+            nominal_inertia_scale,
+        } => {
+            let Some(arm) = &urdf else {
+                return Err(CliError::usage(format!(
+                    "{} learned the nominal model's residual (inertia scale {nominal_inertia_scale}): give the arm with --urdf (and --base, --tip)",
+                    args.model.display()
+                )));
+            };
+            Some(
+                arm.with_scaled_inertias(nominal_inertia_scale)
+                    .map_err(|e| CliError::input(e.to_string()))?,
+            )
+        }
+    };
+    let fraction = match settings.validation {
+        ValidationSplit::TrailingFraction { fraction } => Some(fraction),
+        ValidationSplit::SeparateData | ValidationSplit::NoValidation => None,
+    };
+    let train_rows = data::training_rows(&args.data, &data, fraction)?;
+    let mut config = BroadConfig {
         friction: net.friction().clone(),
+        budget: args.budget.budget(),
         ..BroadConfig::default()
     };
-    let started = Instant::now();
-    let spinner = Spinner::start(
-        progress::wanted(args.quiet),
-        format!("growing by {} nodes on {} rows", args.nodes, train_rows),
+    if let Some(centres) = net
+        .provenance()
+        .fit
+        .as_ref()
+        .and_then(|f| f.centres.as_ref())
+    {
+        config.centre_subsample = centres.centre_subsample;
+        config.widths = centres.widths.clone();
+    }
+    let size = FitSize::growth(
+        &net,
+        train_rows,
+        data.len() - train_rows,
+        args.nodes,
+        &config,
     );
-    let report = net
-        .grow(
-            &train,
-            &GrowthSpec::KMeansPlusPlus {
-                count: args.nodes,
-                seed: args.seed,
-            },
-            &config,
-        )
-        .map_err(learn_err)?;
-    let seconds = started.elapsed().as_secs_f64();
-    drop(spinner);
-    let nrmse = net.evaluate(&validation, 0).map_err(learn_err)?;
-    net.save(&args.out).map_err(learn_err)?;
+    let estimate = check_budget(&size, &config.budget).map_err(learn_error)?;
+    let (x, y) = data::arrays(
+        &args.data,
+        &data,
+        settings.input_filter_hz,
+        nominal.as_ref(),
+    )?;
+    let (train, validation) = data::datasets(
+        &args.data,
+        &data,
+        (&x, &y),
+        train_rows,
+        settings.input_filter_hz,
+    )?;
+    let what = format!(
+        "growing by {} nodes on {train_rows} rows: {}",
+        args.nodes, estimate
+    );
+    let spec = GrowthSpec::KMeansPlusPlus {
+        count: args.nodes,
+        seed: args.seed,
+    };
+    let (result, seconds) = with_progress(args.quiet, what, || net.grow(&train, &spec, &config));
+    let report = result.map_err(|e| match e {
+        BroadError::GrowthDataMismatch(_) => CliError::input(format!(
+            "{} and {}: {e} (grow needs the rows the model was trained on, with its input filter and validation split)",
+            args.data.display(),
+            args.model.display()
+        )),
+        other => learn_error(other),
+    })?;
+    let nrmse = match &validation {
+        Some(v) => net.evaluate(v, 0).map_err(learn_error)?,
+        None => Vec::new(),
+    };
+    if let Some(bad) = nrmse.iter().find(|e| !e.is_finite()) {
+        return Err(CliError {
+            code: 1,
+            message: format!("the grown network's validation NRMSE is {bad}; nothing written"),
+        });
+    }
+    net.save(&args.out).map_err(learn_error)?;
     crate::write_stdout(&format!(
         "samples: {}\nnodes: {} (+{})\nlambda: {:.3e}\ntime: {:.3} s\nvalidation nrmse: [{}]\nwrote {}\n",
         train_rows,

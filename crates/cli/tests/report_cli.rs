@@ -225,7 +225,20 @@ fn run_writes_every_output_and_report_regenerates_them() {
         .starts_with("data:image/png;base64,")));
     assert!(html.contains("@font-face"));
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("figures/fig12_s0_control_inputs.png") && md.contains("| ee_error_rms |"));
+    assert!(
+        md.contains("figures/fig12_s0_control_inputs.png") && md.contains("| `ee_error_max` | m |")
+    );
+    // It opens with the experiment's claim and the headline beside the paper's.
+    assert!(
+        md.starts_with("# Experiment A: deadzone compensation"),
+        "{md}"
+    );
+    let opening = &md[..md.find("## Metrics").unwrap()];
+    assert!(
+        opening.contains("| quantity | paper | this run | agrees |")
+            && opening.contains("below 0.04 m"),
+        "{opening}"
+    );
 
     // `admittance report` regenerates the figures, reports and recording.
     std::fs::remove_dir_all(&figures).unwrap();
@@ -277,6 +290,95 @@ fn run_writes_every_output_and_report_regenerates_them() {
     assert!(err.contains("pd.csv") && err.contains("missing"), "{err}");
     let (code, _, err) = admittance(&["report", dir.join("nowhere").to_str().unwrap()]);
     assert_eq!(code, 3, "{err}");
+}
+
+/// Runs `admittance ARGS` and kills it after `seconds`: `None` when it did not finish.
+fn admittance_within(args: &[&str], seconds: u64) -> Option<(i32, String)> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_admittance"))
+        .current_dir(root())
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    while std::time::Instant::now() < deadline {
+        if let Some(status) = child.try_wait().unwrap() {
+            let mut err = String::new();
+            use std::io::Read as _;
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_string(&mut err)
+                .unwrap();
+            return Some((status.code().unwrap_or(-1), err));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// Issue 14: a folder whose scenario has `d_right = 1e308` and whose series hold 1e308,
+/// NaN and inf made `admittance report` hang in the plotting library. It now finishes,
+/// and the report says what it could not draw.
+#[test]
+fn report_on_huge_and_non_finite_values_finishes() {
+    let tmp = tempdir("huge");
+    let dir = tmp.path();
+    let joints = ["left_s0", "left_s1"];
+    let prefixes = ["q_d", "q_r", "q", "tau_cmd", "tau_applied"];
+    let mut header = vec!["t".to_string()];
+    for p in prefixes {
+        header.extend(joints.iter().map(|j| format!("{p}.{j}")));
+    }
+    header.push("ee_error".into());
+    let mut csv = header.join(",") + "\n";
+    for r in 0..400 {
+        let t = r as f64 * 0.05;
+        let value = match r % 50 {
+            7 => "1e308".to_string(),
+            8 => "-1e308".to_string(),
+            9 => "NaN".to_string(),
+            10 => "inf".to_string(),
+            _ => format!("{}", (t * 0.7).sin()),
+        };
+        let row: Vec<String> = std::iter::once(format!("{t}"))
+            .chain((1..header.len()).map(|_| value.clone()))
+            .collect();
+        csv += &(row.join(",") + "\n");
+    }
+    for v in ["nn_compensated", "nn_uncompensated"] {
+        std::fs::write(dir.join(format!("{v}.csv")), &csv).unwrap();
+    }
+    std::fs::write(
+        dir.join("summary.json"),
+        r#"{"format": "admittance-run", "format_version": 1, "scenario": "deadzone", "joints": ["left_s0", "left_s1"],
+            "variants": {"nn_compensated": {"ee_error_max": 0.001}, "nn_uncompensated": {"ee_error_max": 0.002}}}"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("scenario.toml"),
+        "name = \"deadzone\"\nevaluation_start = 5.0\n[arm]\nurdf = \"nowhere.urdf\"\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 1e308\n",
+    )
+    .unwrap();
+    let (code, err) = admittance_within(&["report", dir.to_str().unwrap(), "--quiet"], 120)
+        .expect("`admittance report` hangs on huge or non-finite values");
+    assert_eq!(code, 0, "{err}");
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        md.contains("not drawn") && md.contains("**Warning:**"),
+        "{md}"
+    );
+    assert!(md.contains("the line at y = 1e308"), "{md}");
+    for f in [
+        "fig08_end_effector_error.png",
+        "fig12_s0_control_inputs.png",
+    ] {
+        assert!(dir.join("figures").join(f).is_file(), "{f}");
+    }
 }
 
 #[test]

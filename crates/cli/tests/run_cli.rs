@@ -34,13 +34,17 @@ period = 2.0
 
 [plant]
 integrator = "semi_implicit_euler"
+sensors = {{ filter_cutoff_hz = 40.0 }}
 
 [controller]
 kind = "pd"
 
 [controller.pd]
-kp = 100.0
-kd = 10.0
+# Per joint (the wrist's inertia is small: with a
+# uniform kd = 10, or kd = 0.2 on w2 without friction, the loop through the 40 Hz velocity
+# filter is unstable, and the run reports it as diverged).
+kp = [240.0, 360.0, 180.0, 120.0, 24.0, 24.0, 2.4]
+kd = [20.0, 30.0, 15.0, 10.0, 1.0, 1.0, 0.05]
 gravity_compensation = true
 
 [controller.neural]
@@ -49,7 +53,8 @@ k2 = 6.0
 [admittance]
 damping = 3.0
 stiffness = 5.0
-saturation = {{ rho = 0.95, centre = 0.0, half_range = 3.1 }}
+# Inside every joint's limits (a wider interval is refused: q_r could leave them).
+saturation = {{ rho = 0.95, centre = [0.0, -0.55, 0.0, 1.284, 0.0, 0.262, 0.0], half_range = [1.5, 1.5, 1.5, 1.3, 1.5, 1.5, 1.5] }}
 "#,
         urdf.display()
     )
@@ -118,7 +123,10 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
     let cases: Vec<(&str, String, &str)> = vec![
         (
             "unknown key",
-            good.replace("kd = 10.0", "kd = 10.0\nki = 1.0"),
+            good.replace(
+                "gravity_compensation = true",
+                "gravity_compensation = true\nki = 1.0",
+            ),
             "controller.pd",
         ),
         (
@@ -128,7 +136,7 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
         ),
         (
             "negative gain",
-            good.replace("kd = 10.0", "kd = -10.0"),
+            good.replace("kd = [20.0", "kd = [-20.0"),
             "controller.pd.kd",
         ),
         (
@@ -150,6 +158,16 @@ fn bad_scenarios_name_file_line_and_key_with_a_hint() {
             "offset length",
             good.replace("-0.67, 1.03, -0.5]", "-0.67]"),
             "trajectory.offset",
+        ),
+        (
+            "pose outside the arm's limits",
+            good.replace("1.94, -0.67", "4.0, -0.67"),
+            "trajectory.offset",
+        ),
+        (
+            "faster than the velocity limit",
+            good.replace("period = 2.0", "period = 0.5"),
+            "trajectory.sines.0.amplitude",
         ),
         ("bad TOML", good.replace("[plant]", "[plant"), ""),
     ];

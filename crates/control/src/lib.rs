@@ -38,6 +38,8 @@
 //! assert_eq!(nn.node_count(NetworkId::F), 512);
 //! ```
 
+#![warn(missing_docs)]
+
 mod admittance;
 mod baselines;
 mod config;
@@ -47,14 +49,17 @@ mod hybrid;
 mod learned;
 mod momentum;
 mod neural;
+mod number_or_list;
 mod observer;
+mod reference;
 mod safe_hold;
+mod task_space;
 
 pub use admittance::{
     saturate, Admittance, AdmittanceConfig, AdmittanceInput, Saturation, SaturationConfig,
 };
 pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, PdController};
-pub use config::JointValues;
+pub use config::{AxisValues, JointValues};
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};
 pub use hybrid::HybridObserver;
@@ -65,7 +70,12 @@ pub use neural::{
     NetworkConfig, NetworkId, NeuralController, NeuralControllerConfig,
 };
 pub use observer::{NoObserver, Observer, ObserverInput, OracleObserver};
+pub use reference::{CompliantReference, ReferenceInput};
 pub use safe_hold::{SafeHold, SafeHoldConfig};
+pub use task_space::{
+    AxisAdmittanceConfig, InverseKinematicsConfig, SingularityDampingConfig, TaskAxis,
+    TaskSaturationConfig, TaskSpaceAdmittance, TaskSpaceAdmittanceConfig, TaskSpaceInput,
+};
 
 /// Re-exports from the learning layer used in the configuration of the networks.
 pub use admittance_learning::rbf::{

@@ -1,56 +1,15 @@
 //! The real-time contract: after construction, no controller step, admittance step or
 //! observer update allocates (issue 3, "Bars"), including fault steps, the dynamic-node
-//! hooks (discard, growth) and the 512-node networks on Baxter's 7 joints. A counting
-//! global allocator (per thread) wraps the system one for this test binary.
+//! hooks (discard, growth) and the 512-node networks on Baxter's 7 joints. The counting
+//! allocator of `admittance-testkit` (per thread) wraps the system one for this test binary.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use admittance_control::*;
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use admittance_testkit::count_allocations as count;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-/// Runs `f` and returns how many allocations this thread made meanwhile.
-fn count(f: impl FnOnce()) -> usize {
-    let before = allocations();
-    f();
-    allocations() - before
-}
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 struct Inputs {
     q: Vec<f64>,
@@ -295,6 +254,68 @@ fn no_step_allocates_after_construction() {
             let _ = adm.step(&a, 1e-3);
         });
         assert_eq!(allocs, 0, "admittance step");
+    }
+
+    // The task-space admittance (wrench estimate, admittance, inverse kinematics,
+    // saturation), behind the shared trait too, with faults of every kind and a reset; on
+    // the Baxter arm and on the planar two-joint arm with two task axes.
+    for (model, axes) in [
+        (common::baxter(), TaskAxis::ALL.to_vec()),
+        (common::two_link(), vec![TaskAxis::X, TaskAxis::Z]),
+    ] {
+        let n = model.nq();
+        let cfg = TaskSpaceAdmittanceConfig {
+            task_axes: axes,
+            linear: AxisAdmittanceConfig {
+                inertia: Some(2.0.into()),
+                ..AxisAdmittanceConfig::default_linear()
+            },
+            ..TaskSpaceAdmittanceConfig::default()
+        };
+        let mut task = TaskSpaceAdmittance::new(model, &cfg).unwrap();
+        let mut inp = Inputs::new(n);
+        inp.set(0);
+        fn input(inp: &Inputs) -> TaskSpaceInput<'_> {
+            TaskSpaceInput {
+                q_d: &inp.q_ref,
+                qdot_d: &inp.qdot_ref,
+                qddot_d: &inp.qddot_ref,
+                q: &inp.q,
+                external_torque_estimate: &inp.est,
+            }
+        }
+        let _ = task.step(&input(&inp), 1e-3); // warm-up (not counted)
+        let short = vec![0.0; n - 1];
+        let allocs = count(|| {
+            for k in 1..500 {
+                inp.set(k);
+                inp.est.iter_mut().for_each(|e| *e *= 40.0);
+                match k % 100 {
+                    7 => inp.est[0] = f64::NAN,
+                    8 => inp.q[n - 1] = f64::INFINITY,
+                    9 => inp.qddot_ref[0] = f64::NAN,
+                    _ => {}
+                }
+                let status = task.step(&input(&inp), 1e-3);
+                assert!(status.is_ok() || k % 100 >= 7);
+                let _ = CompliantReference::step_reference(&mut task, &input(&inp), 1e-3);
+                assert!(task.q_r().iter().all(|v| v.is_finite()));
+            }
+            let _ = task.step(
+                &TaskSpaceInput {
+                    q: &short,
+                    ..input(&inp)
+                },
+                1e-3,
+            );
+            let _ = task.step(&input(&inp), -1.0);
+            // The singular pose of the planar arm (and Baxter's stretched pose).
+            inp.q_ref.fill(0.0);
+            inp.q.fill(0.0);
+            let _ = task.step(&input(&inp), 1e-3);
+            task.reset();
+        });
+        assert_eq!(allocs, 0, "task-space admittance step ({n} joints)");
     }
 
     // Observers.

@@ -1,38 +1,16 @@
 //! The structured deadzone inverse of the neural controller (`deadzone_inverse`, see the
-//! module documentation of `neural.rs`): configuration, projection, reset, and a quick
+//! documentation of `src/neural/deadzone_inverse.rs`): configuration, projection, reset, and a quick
 //! closed-loop check on the 2-joint arm with a deadzone on joint 0.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use admittance_control::*;
+use admittance_testkit::count_allocations;
 use common::*;
 
-// A per-thread counting allocator: the inverse's step must not allocate.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+// The inverse's step must not allocate.
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 fn config(inverse: Option<DeadzoneInverseConfig>) -> NeuralControllerConfig {
     NeuralControllerConfig {
@@ -161,18 +139,15 @@ fn inverse_step_does_not_allocate_and_survives_non_finite_inputs() {
         c.step(&input, 1e-3, tau)
     };
     let _ = step(&mut c, 0.0, &q, &q_ref, &mut tau); // warm-up
-    let before = ALLOCATIONS.with(|a| a.get());
-    for k in 0..500 {
-        q_ref[0] = 0.1 + 0.3 * (k as f64 * 0.05).sin();
-        q[3] = if k == 250 { f64::NAN } else { 0.1 };
-        let _ = step(&mut c, (k + 1) as f64 * 1e-3, &q, &q_ref, &mut tau);
-        assert!(tau.iter().all(|t| t.is_finite()));
-    }
-    assert_eq!(
-        ALLOCATIONS.with(|a| a.get()) - before,
-        0,
-        "the step allocated"
-    );
+    let allocations = count_allocations(|| {
+        for k in 0..500 {
+            q_ref[0] = 0.1 + 0.3 * (k as f64 * 0.05).sin();
+            q[3] = if k == 250 { f64::NAN } else { 0.1 };
+            let _ = step(&mut c, (k + 1) as f64 * 1e-3, &q, &q_ref, &mut tau);
+            assert!(tau.iter().all(|t| t.is_finite()));
+        }
+    });
+    assert_eq!(allocations, 0, "the step allocated");
     let edges = c.deadzone_edges().unwrap();
     // Projection: 0 <= d_r_hat <= 6, -6 <= d_l_hat <= 0 (open loop here: q does not move).
     for pair in edges.chunks(2) {

@@ -24,6 +24,7 @@
 pub mod algorithms;
 mod data;
 mod error;
+mod fingerprint;
 mod model;
 pub mod spatial;
 mod urdf;

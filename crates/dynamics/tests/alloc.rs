@@ -1,46 +1,14 @@
 //! The real-time contract: after `Model` and `Data` are built, no algorithm allocates.
-//! A counting global allocator wraps the system one for this test binary.
+//! The counting allocator of `admittance-testkit` wraps the system one for this test binary.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use admittance_dynamics::*;
+use admittance_testkit::count_allocations;
 use nalgebra::Vector6;
 
-struct Counting;
-
-// Per thread: the test harness's own threads may allocate at any time; only the thread
-// that runs the algorithms is counted.
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 #[test]
 fn no_algorithm_allocates_after_construction() {
@@ -72,18 +40,15 @@ fn no_algorithm_allocates_after_construction() {
         assert!(frame_jacobian(&model, data, &q, 999).is_err());
     };
     run(&mut data); // warm-up
-    let before = ALLOCATIONS.with(Cell::get);
-    for _ in 0..100 {
-        run(&mut data);
-    }
-    let after = ALLOCATIONS.with(Cell::get);
+    let count = count_allocations(|| {
+        for _ in 0..100 {
+            run(&mut data);
+        }
+    });
     assert_eq!(
-        after - before,
-        0,
-        "{} allocations in 100 rounds of every algorithm",
-        after - before
+        count, 0,
+        "{count} allocations in 100 rounds of every algorithm"
     );
     // The counter itself sees this thread's allocations.
-    drop(std::hint::black_box(vec![1u8; 16]));
-    assert!(ALLOCATIONS.with(Cell::get) > after);
+    assert!(count_allocations(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);
 }

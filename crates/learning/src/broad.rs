@@ -21,7 +21,11 @@
 //!   Greville pseudo-inverse form is [`greville_add_columns`] (small problems).
 //! * Allocation-free one-sample prediction ([`BroadModel::predict_into`]).
 //! * Versioned, checksummed, atomically written model files ([`BroadModel::save`],
-//!   [`BroadModel::load`]).
+//!   [`BroadModel::load`]) that know the arm they were trained for and every setting that
+//!   made them ([`Provenance`], [`BroadModel::check_arm`]), written only to a new name or
+//!   over a model file ([`check_model_destination`]).
+//! * Fits refused before they start when they cannot fit in memory or time
+//!   ([`check_budget`], [`Budget`]) and refused after when their result is not finite.
 //!
 //! # Design decisions
 //!
@@ -59,26 +63,39 @@
 //!   one P x block pattern per thread (about 9 MB and 2 MB at P = 1043), never the N x P
 //!   pattern matrix.
 
+mod budget;
 mod centres;
 mod config;
 mod data;
+mod destination;
 mod error;
 mod features;
+mod fit;
 mod gram;
 mod greville;
+mod growth;
 mod io;
 mod kernels;
 mod model;
+mod provenance;
 mod solve;
 
+pub use budget::{
+    check_budget, format_bytes, Budget, Estimate, FitSize, DEFAULT_MAX_FLOP,
+    DEFAULT_MAX_MEMORY_BYTES,
+};
 pub use config::{BroadConfig, FrictionFeatures, GramStrategy, WidthRule};
-pub use data::{Dataset, Standardiser};
+pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
+pub use destination::check_model_destination;
 pub use error::BroadError;
 pub use features::NodeSet;
+pub use fit::{fit, fit_with_nodes, FitReport, LambdaScore, PhaseTimes};
 pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
+pub use growth::{GrowthReport, GrowthSpec};
 pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
 pub use kernels::exp_nonpositive_slice;
-pub use model::{
-    fit, fit_with_nodes, BroadModel, FitReport, GrowthReport, GrowthSpec, LambdaScore, PhaseTimes,
-    Workspace,
+pub use model::{BroadModel, Workspace};
+pub use provenance::{
+    ArmCheck, ArmIdentity, CentreSettings, DataSettings, FitSettings, GrowthRecord, Provenance,
+    TrainingTarget, ValidationSplit,
 };

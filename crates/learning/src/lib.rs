@@ -6,6 +6,8 @@
 //! * [`broad`]: the flat ("broad") RBF network of the force-sensorless observer
 //!   (METHOD.md section 5): ridge regression on free-motion data, incremental growth.
 
+#![warn(missing_docs)]
+
 pub mod broad;
 mod exp;
 pub mod rbf;

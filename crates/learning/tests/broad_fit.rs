@@ -6,40 +6,12 @@ use admittance_learning::broad::{
     fit, fit_with_nodes, BroadConfig, BroadError, Dataset, FrictionFeatures, GramStrategy, NodeSet,
     WidthRule,
 };
+use admittance_testkit::count_allocations;
 use broad_common::{data, rel_diff, small_config, target};
 use proptest::prelude::*;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
-// Counts allocations made by the current thread while COUNTING is set.
-struct CountingAlloc;
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = COUNTING.try_with(|c| {
-            if c.get() {
-                let _ = COUNT.try_with(|n| n.set(n.get() + 1));
-            }
-        });
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = COUNTING.try_with(|c| {
-            if c.get() {
-                let _ = COUNT.try_with(|n| n.set(n.get() + 1));
-            }
-        });
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 #[global_allocator]
-static GLOBAL: CountingAlloc = CountingAlloc;
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 #[test]
 fn fit_learns_a_smooth_map() {
@@ -197,15 +169,14 @@ fn predict_into_does_not_allocate() {
     let mut ws = model.workspace();
     let mut out = [0.0; 2];
     model.predict_into(&x[..3], &mut out, &mut ws).unwrap();
-    COUNTING.with(|c| c.set(true));
-    COUNT.with(|n| n.set(0));
-    for i in 0..500 {
-        model
-            .predict_into(&x[i * 3..i * 3 + 3], &mut out, &mut ws)
-            .unwrap();
-    }
-    COUNTING.with(|c| c.set(false));
-    assert_eq!(COUNT.with(|n| n.get()), 0, "predict_into allocated");
+    let allocations = count_allocations(|| {
+        for i in 0..500 {
+            model
+                .predict_into(&x[i * 3..i * 3 + 3], &mut out, &mut ws)
+                .unwrap();
+        }
+    });
+    assert_eq!(allocations, 0, "predict_into allocated");
 }
 
 /// Block size, thread count and Gram strategy change only the rounding.

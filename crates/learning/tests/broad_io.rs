@@ -93,7 +93,16 @@ fn file_header_names_format_and_version() {
     let h_len = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
     let header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + h_len]).unwrap();
     assert_eq!(header["format"], FORMAT_NAME);
-    assert_eq!(header["format_version"], 1);
+    assert_eq!(header["format_version"], 2);
+    assert!(header["written_by"]
+        .as_str()
+        .unwrap()
+        .starts_with("admittance-learning "));
+    // What the fit recorded; what only the caller knows is null until set.
+    assert_eq!(header["fit"]["nodes"], 25);
+    assert_eq!(header["fit"]["training_rows"], 800);
+    assert_eq!(header["fit"]["centres"]["seed"], 11);
+    assert!(header["arm"].is_null() && header["data"].is_null());
     assert_eq!(header["d_in"], 3);
     assert_eq!(header["nodes"], 25);
     let n = bytes.len();
@@ -164,7 +173,7 @@ fn wrong_version_format_or_magic() {
     let p = Path::new("future.brbf");
     let h_len = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
     let text = String::from_utf8_lossy(&bytes[16..16 + h_len]).to_string();
-    assert!(text.contains("\"format_version\":1"), "{text}");
+    assert!(text.contains("\"format_version\":2"), "{text}");
     let replace = |from: &str, to: &str| -> Vec<u8> {
         assert_eq!(from.len(), to.len());
         let mut b = bytes.clone();
@@ -175,15 +184,16 @@ fn wrong_version_format_or_magic() {
         b[pos..pos + to.len()].copy_from_slice(to.as_bytes());
         b
     };
-    match BroadModel::from_bytes(&replace("\"format_version\":1", "\"format_version\":7"), p) {
+    match BroadModel::from_bytes(&replace("\"format_version\":2", "\"format_version\":7"), p) {
         Err(
             e @ BroadError::UnsupportedVersion {
                 found: 7,
-                supported: 1,
+                supported: 2,
                 ..
             },
         ) => {
             assert!(e.to_string().contains("future.brbf"));
+            assert!(e.to_string().contains("reads versions 1 to 2"), "{e}");
         }
         other => panic!("{other:?}"),
     }
@@ -213,7 +223,12 @@ fn missing_file_and_bad_directory_are_io_errors() {
         other => panic!("{other:?}"),
     }
     let (m, _, _) = model();
-    assert!(matches!(m.save(p), Err(BroadError::Io { .. })));
+    match m.save(p) {
+        Err(e @ BroadError::Destination { .. }) => {
+            assert!(e.to_string().contains("nonexistent-dir-broad"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 /// Flipping any byte never panics and never loads silently.

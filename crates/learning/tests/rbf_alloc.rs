@@ -1,61 +1,17 @@
 //! The per-step methods of the Gaussian RBF layer allocate nothing after construction
 //! (METHOD.md section 4: dynamic nodes "without allocation in the control step").
 //!
-//! A counting global allocator wraps `System`; only allocations made by this test's thread
-//! while counting is switched on are counted, so the test harness cannot interfere.
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+//! The counting allocator of `admittance-testkit` wraps `System`; only allocations made by
+//! this test's thread inside the measured closure are counted, so the test harness cannot
+//! interfere.
 
 use admittance_learning::rbf::{
     GaussianRbfLayer, GrowthParams, Integrator, Placement, RbfLayerConfig,
 };
-
-struct Counting;
-
-thread_local! {
-    static ACTIVE: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-fn note() {
-    // `try_with`: the thread-locals may be gone while the thread shuts down.
-    let _ = ACTIVE.try_with(|a| {
-        if a.get() {
-            let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-        }
-    });
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use admittance_testkit::count_allocations as allocations;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Allocations made by `f` on this thread.
-fn allocations(f: impl FnOnce()) -> usize {
-    COUNT.with(|c| c.set(0));
-    ACTIVE.with(|a| a.set(true));
-    f();
-    ACTIVE.with(|a| a.set(false));
-    COUNT.with(|c| c.get())
-}
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 #[test]
 fn counting_allocator_counts() {

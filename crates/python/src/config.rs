@@ -4,11 +4,11 @@
 //! that the same validation applies and an unknown key is an error naming it.
 //!
 //! The dictionary becomes a TOML table (`None` values are left out, i.e. take their
-//! default; numpy arrays become lists), which `admittance_sim::scenario::ScenarioSource`
+//! default; numpy arrays become lists), which `admittance_scenario::ScenarioSource`
 //! resolves into the target struct.
 
 use admittance_control::JointValues;
-use admittance_sim::scenario::ScenarioSource;
+use admittance_scenario::ScenarioSource;
 use numpy::prelude::*;
 use numpy::PyUntypedArray;
 use pyo3::exceptions::PyTypeError;

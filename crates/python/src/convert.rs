@@ -277,9 +277,9 @@ pub fn broad_error(e: admittance_learning::broad::BroadError) -> PyErr {
 
 /// A free-motion data error: I/O is an `OSError`, anything else (with its line and column)
 /// a `ValueError`.
-pub fn free_motion_error(e: admittance_sim::FreeMotionError) -> PyErr {
+pub fn free_motion_error(e: admittance_scenario::FreeMotionError) -> PyErr {
     match e {
-        admittance_sim::FreeMotionError::Io { .. } => PyOSError::new_err(e.to_string()),
+        admittance_scenario::FreeMotionError::Io { .. } => PyOSError::new_err(e.to_string()),
         other => PyValueError::new_err(other.to_string()),
     }
 }

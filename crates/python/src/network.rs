@@ -13,7 +13,7 @@ use admittance_dynamics::{rnea, Data, Model};
 use admittance_learning::broad::{
     fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec, WidthRule,
 };
-use admittance_sim::FreeMotionData;
+use admittance_scenario::FreeMotionData;
 use numpy::PyArray1;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
@@ -191,14 +191,14 @@ fn training_arrays(
         )));
     }
     let (x, mut y) =
-        admittance_sim::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
+        admittance_scenario::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
             value_error(format!(
                 "`input_filter_hz` {input_filter_hz} with the data of {source}: {e}"
             ))
         })?;
     if let Some(model) = nominal {
         // What the nominal model misses: the hybrid observer's residual network, as the
-        // scenarios train it (admittance_sim::scenario::training).
+        // scenarios train it (admittance_scenario training).
         let mut d = Data::new(model);
         for (row, target) in x.chunks_exact(3 * n).zip(y.chunks_exact_mut(n)) {
             let tau = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])

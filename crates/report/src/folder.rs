@@ -1,17 +1,14 @@
-//! A run folder read back from disk: `summary.json`, `scenario.toml` and the time series
-//! of every variant (`VARIANT.csv`), plus `free_motion*.csv` when present.
+//! A run folder read back from disk through the contract of `admittance_runfolder`:
+//! `summary.json`, `scenario.toml`, the time series of every variant (`VARIANT.csv`) and,
+//! when present, `free_motion*.csv`, `weights_VARIANT.csv` and `validation_VARIANT.csv`.
 
 use std::path::{Path, PathBuf};
 
+use admittance_runfolder::{columns, files, summary};
 use serde_json::Value;
 
 use crate::table::Table;
 use crate::ReportError;
-
-/// The `format` string of `summary.json` this crate reads.
-pub const RUN_FORMAT: &str = "admittance-run";
-/// The `format_version`s of `summary.json` this crate reads.
-pub const SUPPORTED_RUN_FORMAT_VERSIONS: &[u64] = &[1];
 
 /// One variant: its metrics (from `summary.json`) and its time series.
 #[derive(Clone, Debug)]
@@ -31,13 +28,21 @@ pub struct RunFolder {
     pub dir: PathBuf,
     /// Scenario name (`summary.json`'s `scenario`).
     pub scenario: String,
+    /// The plant that produced the run when it is not this project's simulator
+    /// (`summary.json`'s `plant`, e.g. `mujoco`).
+    pub plant: Option<String>,
     /// Joint names in chain order.
     pub joints: Vec<String>,
-    /// The variants, in `summary.json`'s order.
+    /// The variants in the scenario's order: `variant_order` of `summary.json`, else the
+    /// order of `[variants.*]` in `scenario.toml`, else by name.
     pub variants: Vec<Variant>,
+    /// Warnings recorded with the run (`summary.json`'s `warnings`: how the arm's
+    /// description was read).
+    pub warnings: Vec<String>,
     /// The scenario file as run (`scenario.toml`), when present and readable.
     pub scenario_toml: Option<toml::Table>,
-    /// Free-motion recordings (`free_motion.csv`, `free_motion_VARIANT.csv`): file name and data.
+    /// Free-motion recordings (`free_motion.csv`, `free_motion_VARIANT.csv`): file name
+    /// and the columns `t` and `q.*`.
     pub free_motion: Vec<(String, Table)>,
     /// Per-node weight norms of the f network (`weights_VARIANT.csv`, runs with dynamic
     /// nodes): variant name and data.
@@ -54,6 +59,84 @@ fn input(path: &Path, message: impl Into<String>) -> ReportError {
     }
 }
 
+/// Parses `summary.json` and checks its format marker and version.
+fn read_summary(path: &Path) -> Result<Value, ReportError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        input(
+            path,
+            format!("cannot read ({e}); is this a run folder? (`admittance run` writes it)"),
+        )
+    })?;
+    let value: Value = serde_json::from_str(&text).map_err(|e| {
+        input(
+            path,
+            format!("not valid JSON ({e}); regenerate the folder with `admittance run`"),
+        )
+    })?;
+    let format = value.get(summary::KEY_FORMAT).and_then(Value::as_str);
+    if format != Some(summary::FORMAT) {
+        return Err(input(
+            path,
+            format!(
+                "`{}` is {}, expected \"{}\": not a run summary",
+                summary::KEY_FORMAT,
+                format.map_or("missing".to_string(), |f| format!("\"{f}\"")),
+                summary::FORMAT
+            ),
+        ));
+    }
+    match value.get(summary::KEY_FORMAT_VERSION).and_then(Value::as_u64) {
+        Some(v) if summary::SUPPORTED_VERSIONS.contains(&v) => Ok(value),
+        Some(v) => Err(input(
+            path,
+            format!(
+                "format_version {v} is not supported by this build (it reads {:?}); rerun the scenario with this build or use a matching `admittance`",
+                summary::SUPPORTED_VERSIONS
+            ),
+        )),
+        None => Err(input(
+            path,
+            "`format_version` is missing or not a whole number; regenerate the folder with `admittance run`",
+        )),
+    }
+}
+
+/// The variant names of `scenario.toml` in the order of the file (`[variants.NAME]`).
+fn scenario_variant_order(text: &str) -> Vec<String> {
+    let Ok(doc) = text.parse::<toml_edit::DocumentMut>() else {
+        return Vec::new();
+    };
+    doc.get("variants")
+        .and_then(toml_edit::Item::as_table_like)
+        .map(|t| t.iter().map(|(k, _)| k.to_string()).collect())
+        .unwrap_or_default()
+}
+
+/// `names` (the variants of `summary.json`) in the scenario's order.
+fn ordered(names: Vec<String>, summary_order: &[String], file_order: &[String]) -> Vec<String> {
+    let order = if summary_order.is_empty() {
+        file_order
+    } else {
+        summary_order
+    };
+    let mut out: Vec<String> = order
+        .iter()
+        .filter(|n| names.contains(n))
+        .cloned()
+        .collect();
+    out.dedup();
+    out.extend(names.into_iter().filter(|n| !order.contains(n)));
+    out
+}
+
+fn string_list(value: Option<&Value>) -> Option<Vec<String>> {
+    value.and_then(Value::as_array).map(|a| {
+        a.iter()
+            .filter_map(|j| j.as_str().map(String::from))
+            .collect()
+    })
+}
+
 impl RunFolder {
     /// Reads a run folder written by `admittance run`.
     pub fn load(dir: &Path) -> Result<Self, ReportError> {
@@ -63,69 +146,34 @@ impl RunFolder {
                 "not a folder; pass the folder written by `admittance run SCENARIO --out DIR`",
             ));
         }
-        let summary_path = dir.join("summary.json");
-        let text = std::fs::read_to_string(&summary_path).map_err(|e| {
-            input(
-                &summary_path,
-                format!("cannot read ({e}); is this a run folder? (`admittance run` writes it)"),
-            )
-        })?;
-        let summary: Value = serde_json::from_str(&text).map_err(|e| {
-            input(
-                &summary_path,
-                format!("not valid JSON ({e}); regenerate the folder with `admittance run`"),
-            )
-        })?;
-        let format = summary.get("format").and_then(Value::as_str);
-        if format != Some(RUN_FORMAT) {
-            return Err(input(
-                &summary_path,
-                format!(
-                    "`format` is {}, expected \"{RUN_FORMAT}\": not a run summary",
-                    format.map_or("missing".to_string(), |f| format!("\"{f}\""))
-                ),
-            ));
-        }
-        let version = summary.get("format_version").and_then(Value::as_u64);
-        match version {
-            Some(v) if SUPPORTED_RUN_FORMAT_VERSIONS.contains(&v) => {}
-            Some(v) => {
-                return Err(input(
-                    &summary_path,
-                    format!(
-                        "format_version {v} is not supported by this build (it reads {:?}); rerun the scenario with this build or use a matching `admittance`",
-                        SUPPORTED_RUN_FORMAT_VERSIONS
-                    ),
-                ))
-            }
-            None => {
-                return Err(input(
-                    &summary_path,
-                    "`format_version` is missing or not a whole number; regenerate the folder with `admittance run`",
-                ))
-            }
-        }
+        let summary_path = dir.join(files::SUMMARY);
+        let summary = read_summary(&summary_path)?;
         let scenario = summary
-            .get("scenario")
+            .get(summary::KEY_SCENARIO)
             .and_then(Value::as_str)
             .ok_or_else(|| input(&summary_path, "`scenario` (a string) is missing"))?
             .to_string();
-        let joints: Vec<String> = summary
-            .get("joints")
-            .and_then(Value::as_array)
-            .map(|a| {
-                a.iter()
-                    .filter_map(|j| j.as_str().map(String::from))
-                    .collect()
-            })
+        let joints = string_list(summary.get(summary::KEY_JOINTS))
             .ok_or_else(|| input(&summary_path, "`joints` (a list of names) is missing"))?;
         let variant_map = summary
-            .get("variants")
+            .get(summary::KEY_VARIANTS)
             .and_then(Value::as_object)
             .ok_or_else(|| input(&summary_path, "`variants` (an object) is missing"))?;
+        let scenario_text = std::fs::read_to_string(dir.join(files::SCENARIO)).ok();
+        let scenario_toml = scenario_text
+            .as_deref()
+            .and_then(|t| t.parse::<toml::Table>().ok());
+        let names = ordered(
+            variant_map.keys().cloned().collect(),
+            &string_list(summary.get(summary::KEY_VARIANT_ORDER)).unwrap_or_default(),
+            &scenario_text
+                .as_deref()
+                .map(scenario_variant_order)
+                .unwrap_or_default(),
+        );
         let mut variants = Vec::new();
-        for (name, metrics) in variant_map {
-            let csv = dir.join(format!("{name}.csv"));
+        for name in names {
+            let csv = dir.join(files::series(&name));
             if !csv.is_file() {
                 return Err(input(
                     &csv,
@@ -133,54 +181,45 @@ impl RunFolder {
                 ));
             }
             let table = Table::load(&csv)?;
-            if !table.has("t") {
+            if !table.has(columns::TIME) {
                 return Err(input(
                     &csv,
-                    "no `t` column (time, s): not a run time series",
+                    format!(
+                        "no `{}` column (time, s): not a run time series",
+                        columns::TIME
+                    ),
                 ));
             }
+            let metrics = variant_map[&name].as_object().cloned().unwrap_or_default();
             variants.push(Variant {
-                name: name.clone(),
-                metrics: metrics.as_object().cloned().unwrap_or_default(),
+                name,
+                metrics,
                 table,
             });
         }
-        let scenario_path = dir.join("scenario.toml");
-        let scenario_toml = std::fs::read_to_string(&scenario_path)
-            .ok()
-            .and_then(|t| t.parse::<toml::Table>().ok());
-        let mut free_motion = Vec::new();
-        let mut names: Vec<String> = std::fs::read_dir(dir)
-            .map_err(|e| input(dir, format!("cannot list: {e}")))?
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().to_string())
-            .filter(|n| n.starts_with("free_motion") && n.ends_with(".csv"))
-            .collect();
-        names.sort();
-        for n in names {
-            // Only the angles are drawn (Figs 13, 14): the file can be hundreds of MB.
-            let keep = |c: &str| c == "t" || c.starts_with("q.");
-            free_motion.push((n.clone(), Table::load_columns(&dir.join(&n), &keep)?));
-        }
+        let free_motion = load_free_motion(dir)?;
         let mut node_weights = Vec::new();
-        for v in &variants {
-            let path = dir.join(format!("weights_{}.csv", v.name));
-            if path.is_file() {
-                node_weights.push((v.name.clone(), Table::load_columns(&path, &|_| true)?));
-            }
-        }
         let mut observer_validation = Vec::new();
         for v in &variants {
-            let path = dir.join(format!("validation_{}.csv", v.name));
+            let path = dir.join(files::node_weights(&v.name));
             if path.is_file() {
-                observer_validation.push((v.name.clone(), Table::load_columns(&path, &|_| true)?));
+                node_weights.push((v.name.clone(), Table::load(&path)?));
+            }
+            let path = dir.join(files::observer_validation(&v.name));
+            if path.is_file() {
+                observer_validation.push((v.name.clone(), Table::load(&path)?));
             }
         }
         Ok(Self {
             dir: dir.to_path_buf(),
             scenario,
+            plant: summary
+                .get(summary::KEY_PLANT)
+                .and_then(Value::as_str)
+                .map(String::from),
             joints,
             variants,
+            warnings: string_list(summary.get(summary::KEY_WARNINGS)).unwrap_or_default(),
             scenario_toml,
             free_motion,
             node_weights,
@@ -192,27 +231,52 @@ impl RunFolder {
     pub fn variant(&self, name: &str) -> Option<&Variant> {
         self.variants.iter().find(|v| v.name == name)
     }
+}
 
-    /// A value of the scenario file by dotted key (`"dynamic_nodes.approximation_window"`).
-    pub fn scenario_value(&self, key: &str) -> Option<&toml::Value> {
-        let mut parts = key.split('.');
-        let mut value = self.scenario_toml.as_ref()?.get(parts.next()?)?;
-        for p in parts {
-            value = value.as_table()?.get(p)?;
-        }
-        Some(value)
-    }
+/// `free_motion*.csv`, sorted by name: only `t` and the angles are kept (Figs 13, 14), the
+/// file can be hundreds of MB.
+fn load_free_motion(dir: &Path) -> Result<Vec<(String, Table)>, ReportError> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| input(dir, format!("cannot list: {e}")))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| files::is_free_motion(n))
+        .collect();
+    names.sort();
+    let angle_prefix = format!("{}.", columns::POSITION);
+    let keep = |c: &str| c == columns::TIME || c.starts_with(&angle_prefix);
+    names
+        .into_iter()
+        .map(|n| Ok((n.clone(), Table::load_columns(&dir.join(&n), &keep)?)))
+        .collect()
+}
 
-    /// A value of the scenario file as variant `variant` sees it: the variant's override
-    /// (`[variants.NAME]` with the same dotted key) when there is one, else the base value.
-    pub fn variant_value(&self, variant: &str, key: &str) -> Option<&toml::Value> {
-        self.scenario_value(&format!("variants.{variant}.{key}"))
-            .or_else(|| self.scenario_value(key))
-    }
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-    /// The scenario's one-line description (`description` in scenario.toml).
-    pub fn description(&self) -> Option<&str> {
-        self.scenario_value("description")
-            .and_then(toml::Value::as_str)
+    #[test]
+    fn variants_follow_the_scenario_order() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let summary = names(&["b", "a", "c"]);
+        // summary.json's variant_order first, unknown variants last.
+        assert_eq!(
+            ordered(names(&["a", "b", "c", "d"]), &summary, &[]),
+            ["b", "a", "c", "d"]
+        );
+        // Else the order of scenario.toml.
+        let file = scenario_variant_order(
+            "name = \"x\"\n[variants.zeta]\nk = 1\n[variants.alpha]\nk = 2\n[variants.mid]\n",
+        );
+        assert_eq!(file, ["zeta", "alpha", "mid"]);
+        assert_eq!(
+            ordered(names(&["alpha", "mid", "zeta"]), &[], &file),
+            ["zeta", "alpha", "mid"]
+        );
+        // Dotted keys count too.
+        assert_eq!(
+            scenario_variant_order("variants.b.x = 1\nvariants.a.x = 2\n"),
+            ["b", "a"]
+        );
     }
 }

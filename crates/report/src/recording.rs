@@ -11,6 +11,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::{Seek, Write};
 
+use admittance_runfolder::columns;
+
 use crate::folder::RunFolder;
 use crate::table::Table;
 
@@ -31,26 +33,29 @@ pub const GROUPS: &[Group] = &[
         "joint_state",
         "admittance.JointState",
         &[
-            ("q", "true joint angle (rad)"),
-            ("qdot", "true joint velocity (rad/s)"),
-            ("q_meas", "encoder reading (rad)"),
+            (columns::POSITION, "true joint angle (rad)"),
+            (columns::VELOCITY, "true joint velocity (rad/s)"),
+            (columns::MEASURED_POSITION, "encoder reading (rad)"),
         ],
     ),
     (
         "reference",
         "admittance.Reference",
         &[
-            ("q_d", "desired trajectory (rad)"),
-            ("q_r", "compliant reference, admittance output (rad)"),
+            (columns::DESIRED, "desired trajectory (rad)"),
+            (
+                columns::REFERENCE,
+                "compliant reference, admittance output (rad)",
+            ),
         ],
     ),
     (
         "torque",
         "admittance.Torque",
         &[
-            ("tau_cmd", "commanded torque (N m)"),
+            (columns::COMMAND, "commanded torque (N m)"),
             (
-                "tau_applied",
+                columns::APPLIED,
                 "applied torque after deadzone and limits (N m)",
             ),
         ],
@@ -59,22 +64,45 @@ pub const GROUPS: &[Group] = &[
         "external_torque",
         "admittance.ExternalTorque",
         &[
-            ("tau_ext", "true external torque (N m)"),
-            ("tau_ext_hat", "estimated external torque (N m)"),
+            (columns::EXTERNAL, "true external torque (N m)"),
+            (
+                columns::EXTERNAL_ESTIMATE,
+                "estimated external torque (N m)",
+            ),
         ],
     ),
     (
         "approximation",
         "admittance.Approximation",
         &[
-            ("f", "f = M alpha' + C alpha + G of the true arm (N m)"),
-            ("f_hat", "the network's f (N m)"),
+            (
+                columns::F_TRUE,
+                "f = M alpha' + C alpha + G of the true arm (N m)",
+            ),
+            (columns::F_ESTIMATE, "the network's f (N m)"),
         ],
     ),
     (
         "nodes",
         "admittance.NodeCounts",
-        &[("nodes", "node count per network")],
+        &[(columns::NODES, "node count per network")],
+    ),
+    (
+        "hand",
+        "admittance.Hand",
+        &[
+            (columns::HAND_FORCE, "true force on the hand (N, base axes)"),
+            (
+                columns::HAND_FORCE_ESTIMATE,
+                "estimated hand force J^+T tau_ext_hat (N)",
+            ),
+            (columns::HAND_POSITION, "hand position (m, base frame)"),
+            (
+                columns::HAND_REFERENCE,
+                "hand position of the compliant reference (m)",
+            ),
+            (columns::HAND_DESIRED, "desired hand position (m)"),
+        ],
     ),
 ];
 
@@ -101,7 +129,7 @@ fn channels(variant: &str, table: &Table) -> Vec<Channel> {
     for (k, c) in table.columns.iter().enumerate() {
         match c.split_once('.') {
             Some((p, m)) => by_prefix.entry(p).or_default().push((m.to_string(), k)),
-            None if c != "t" => scalars.push((c.clone(), k)),
+            None if c != columns::TIME => scalars.push((c.clone(), k)),
             None => {}
         }
     }
@@ -164,7 +192,7 @@ fn channels(variant: &str, table: &Table) -> Vec<Channel> {
         let fields = scalars
             .into_iter()
             .map(|(name, k)| {
-                let desc = if name == "ee_error" {
+                let desc = if name == columns::HAND_ERROR {
                     "hand position error (m)".to_string()
                 } else {
                     format!("column {name}")
@@ -247,7 +275,9 @@ pub fn write<W: Write + Seek>(folder: &RunFolder, w: W) -> Result<u64, String> {
     let mut count = 0u64;
     let mut buf = String::new();
     for v in &folder.variants {
-        let Some(t) = v.table.col("t") else { continue };
+        let Some(t) = v.table.col(columns::TIME) else {
+            continue;
+        };
         let chans = channels(&v.name, &v.table);
         let mut ids = Vec::new();
         for c in &chans {
@@ -292,12 +322,21 @@ mod tests {
     fn groups_columns_into_channels() {
         let t = Table::from_columns(
             [
-                "t", "q.a", "q.b", "q_d.a", "q_d.b", "ee_error", "nodes.f", "zeta.a",
+                "t",
+                "q.a",
+                "q.b",
+                "q_d.a",
+                "q_d.b",
+                "ee_error",
+                "nodes.f",
+                "zeta.a",
+                "f_hand.x",
+                "f_hand_hat.x",
             ]
             .iter()
             .map(|s| s.to_string())
             .collect(),
-            vec![vec![0.0, 0.5]; 8],
+            vec![vec![0.0, 0.5]; 10],
         );
         let ch = channels("v", &t);
         let topics: Vec<&str> = ch.iter().map(|c| c.topic.as_str()).collect();
@@ -307,6 +346,7 @@ mod tests {
                 "/v/joint_state",
                 "/v/reference",
                 "/v/nodes",
+                "/v/hand",
                 "/v/zeta",
                 "/v/scalars"
             ]
@@ -315,7 +355,10 @@ mod tests {
         message(&ch[0], &t, 1, 0.5, &mut s);
         let v: serde_json::Value = serde_json::from_str(&s).unwrap();
         assert_eq!(v["q"]["b"], 0.5);
-        message(&ch[4], &t, 0, 0.0, &mut s);
+        message(&ch[3], &t, 1, 0.5, &mut s);
+        let v: serde_json::Value = serde_json::from_str(&s).unwrap();
+        assert_eq!(v["f_hand_hat"]["x"], 0.5);
+        message(&ch[5], &t, 0, 0.0, &mut s);
         let v: serde_json::Value = serde_json::from_str(&s).unwrap();
         assert_eq!(v["ee_error"], 0.0);
         for c in &ch {

@@ -19,47 +19,8 @@
 //!
 //! (zero derivatives until there are enough samples, as in [`crate::Sensors`]).
 
-use crate::free_motion::FreeMotionData;
 use crate::plant::error::SimError;
 use crate::sensors::LowPass;
-
-/// The training arrays of a learned observer from free-motion data: inputs `[q, qdot,
-/// qddot]` (row-major, `3n` per row) and torques (`n` per row), through the conditioning
-/// stage when `input_filter_hz > 0` (exactly as the scenario runner feeds the observer at
-/// run time), else as recorded. The sample rate is the data's mean rate.
-pub fn observer_training_arrays(
-    data: &FreeMotionData,
-    input_filter_hz: f64,
-) -> Result<(Vec<f64>, Vec<f64>), SimError> {
-    let n = data.dof();
-    let mut x = Vec::with_capacity(data.len() * 3 * n);
-    let mut y = Vec::with_capacity(data.len() * n);
-    if input_filter_hz > 0.0 {
-        let span = data.t.last().copied().unwrap_or(0.0) - data.t.first().copied().unwrap_or(0.0);
-        let rate = if data.len() > 1 && span > 0.0 {
-            (data.len() - 1) as f64 / span
-        } else {
-            0.0
-        };
-        let mut c = InputConditioner::new(n, input_filter_hz, rate)?;
-        for k in 0..data.len() {
-            let r = k * n..(k + 1) * n;
-            c.update(&data.q[r.clone()], &data.tau[r]);
-            for s in [&c.q, &c.qdot, &c.qddot] {
-                x.extend_from_slice(s);
-            }
-            y.extend_from_slice(&c.tau);
-        }
-    } else {
-        for k in 0..data.len() {
-            for s in [&data.q, &data.qdot, &data.qddot] {
-                x.extend_from_slice(&s[k * n..(k + 1) * n]);
-            }
-        }
-        y.extend_from_slice(&data.tau);
-    }
-    Ok((x, y))
-}
 
 /// The conditioning stage; allocation-free per update.
 #[derive(Clone, Debug)]

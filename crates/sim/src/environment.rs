@@ -370,6 +370,8 @@ pub struct Environment {
     in_contact: bool,
     /// Normal force of each wall at the last evaluation (N).
     wall_forces: Vec<f64>,
+    tip_frame: usize,
+    tip_force: Vector3<f64>,
 }
 
 impl Environment {
@@ -469,6 +471,8 @@ impl Environment {
             damping_diag: vec![0.0; n],
             in_contact: false,
             wall_forces: vec![0.0; n_walls],
+            tip_frame: model.tip_frame,
+            tip_force: Vector3::zeros(),
         })
     }
 
@@ -492,6 +496,7 @@ impl Environment {
         self.damping_diag.fill(0.0);
         self.in_contact = false;
         self.wall_forces.fill(0.0);
+        self.tip_force = Vector3::zeros();
     }
 
     /// Decides which environments act during the step that starts at `t` from position
@@ -553,6 +558,12 @@ impl Environment {
         &self.wall_forces
     }
 
+    /// The force of the walls and the scripted forces on the model's tip frame (the hand)
+    /// at the last evaluation (N, base axes): what a force sensor at the hand would read.
+    pub fn tip_force(&self) -> [f64; 3] {
+        [self.tip_force.x, self.tip_force.y, self.tip_force.z]
+    }
+
     /// The explicitly integrated part of `tau_ext` at time `t`, state `(q, v)`, written to
     /// `out`: `-G_E (q - q_E)` of the active springs, the walls' `J^T f`, the scripted
     /// torques and forces. (`-M_E qddot` and `-C_E qdot` are handled implicitly by the
@@ -580,6 +591,7 @@ impl Environment {
             }
         }
         self.in_contact = false;
+        self.tip_force = Vector3::zeros();
         for (w, force) in self.walls.iter().zip(self.wall_forces.iter_mut()) {
             *force = 0.0;
             if !w.active {
@@ -609,6 +621,9 @@ impl Environment {
             *force = fn_;
             self.in_contact = true;
             let f = w.normal * fn_;
+            if w.frame == self.tip_frame {
+                self.tip_force += f;
+            }
             for (j, o) in out.iter_mut().enumerate() {
                 *o += jac[(0, j)] * f.x + jac[(1, j)] * f.y + jac[(2, j)] * f.z;
             }
@@ -624,6 +639,9 @@ impl Environment {
             );
             if f == Vector3::zeros() {
                 continue;
+            }
+            if p.frame == self.tip_frame {
+                self.tip_force += f;
             }
             if frame_jacobian(model, data, q, p.frame).is_err() {
                 continue;

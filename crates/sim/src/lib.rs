@@ -35,18 +35,15 @@
 
 pub mod conditioning;
 pub mod environment;
-pub mod free_motion;
 pub mod integrator;
 pub mod plant;
-pub mod scenario;
 pub mod sensors;
 
-pub use conditioning::{observer_training_arrays, InputConditioner};
+pub use conditioning::InputConditioner;
 pub use environment::{
     Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
     TipForceProfileConfig, WallConfig,
 };
-pub use free_motion::{FreeMotionData, FreeMotionError};
 pub use integrator::Integrator;
 pub use plant::actuator::{clamp_effort, Deadzone};
 pub use plant::config::{

@@ -5,48 +5,13 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use admittance_dynamics::{forward_kinematics, Data};
 use admittance_sim::*;
+use admittance_testkit::count_allocations;
 use common::*;
 
-struct Counting;
-
-// Per thread: the test harness's own threads may allocate at any time (a global count
-// made this test flaky); only the thread that runs the loop is watched.
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    if COUNTING.try_with(Cell::get).unwrap_or(false) {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        bump();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: admittance_testkit::CountingAllocator = admittance_testkit::CountingAllocator;
 
 fn everything(integrator: Integrator, solver: Solver) -> PlantConfig {
     let model = baxter();
@@ -137,27 +102,25 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
             let mut tau = [0.0; 7];
             // One period outside the count (nothing is lazily allocated, but be fair).
             plant.step_control(&tau).unwrap();
-            ALLOCATIONS.with(|c| c.set(0));
-            COUNTING.with(|c| c.set(true));
-            for k in 0..250 {
-                if k == 100 {
-                    tau[2] = f64::NAN;
+            let count = count_allocations(|| {
+                for k in 0..250 {
+                    if k == 100 {
+                        tau[2] = f64::NAN;
+                    }
+                    plant.step_control(&tau).unwrap();
+                    plant.step(&tau).unwrap();
+                    let m = sensors.sample(plant.time(), plant.q(), &tau).unwrap();
+                    for i in 0..7 {
+                        let q = if m.q[i].is_finite() {
+                            m.q[i]
+                        } else {
+                            m.q_filtered[i]
+                        };
+                        tau[i] = 30.0 * (target[i] - q) - 3.0 * m.qdot[i];
+                    }
+                    std::hint::black_box(plant.energy());
                 }
-                plant.step_control(&tau).unwrap();
-                plant.step(&tau).unwrap();
-                let m = sensors.sample(plant.time(), plant.q(), &tau).unwrap();
-                for i in 0..7 {
-                    let q = if m.q[i].is_finite() {
-                        m.q[i]
-                    } else {
-                        m.q_filtered[i]
-                    };
-                    tau[i] = 30.0 * (target[i] - q) - 3.0 * m.qdot[i];
-                }
-                std::hint::black_box(plant.energy());
-            }
-            COUNTING.with(|c| c.set(false));
-            let count = ALLOCATIONS.with(Cell::get);
+            });
             assert_eq!(
                 count, 0,
                 "{integrator} / {solver:?}: {count} allocations in 250 control periods"
@@ -169,9 +132,5 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
         }
     }
     // The counter itself sees this thread's allocations.
-    ALLOCATIONS.with(|c| c.set(0));
-    COUNTING.with(|c| c.set(true));
-    drop(std::hint::black_box(vec![1u8; 16]));
-    COUNTING.with(|c| c.set(false));
-    assert!(ALLOCATIONS.with(Cell::get) > 0);
+    assert!(count_allocations(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);
 }

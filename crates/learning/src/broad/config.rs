@@ -1,5 +1,6 @@
 //! Configuration of the broad network fit (METHOD.md sections 5 and 7).
 
+use super::budget::Budget;
 use super::error::BroadError;
 use serde::{Deserialize, Serialize};
 
@@ -130,6 +131,11 @@ pub struct BroadConfig {
     pub threads: usize,
     /// Parallelisation of the Gram update.
     pub gram_strategy: GramStrategy,
+    /// Memory and work limits checked before a fit or growth starts
+    /// ([`check_budget`](super::check_budget)). Not a setting of the result: it is not
+    /// serialised.
+    #[serde(skip)]
+    pub budget: Budget,
 }
 
 impl Default for BroadConfig {
@@ -144,6 +150,7 @@ impl Default for BroadConfig {
             block_rows: 2048,
             threads: 0,
             gram_strategy: GramStrategy::PerThread,
+            budget: Budget::default(),
         }
     }
 }

@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 ///
 /// For the observer of METHOD.md section 5 a row is `X = [q, q', q'']` (d_in = 3n) and the
 /// target is the measured free-motion torque `tau` (d_out = n). Construction checks the
-/// shapes and that every value is finite, so the fitting code never sees NaN.
+/// shapes and that every value is finite and within [`MAX_ABS_DATA_VALUE`], so the fitting
+/// code never sees NaN and its sums of squares never overflow.
 #[derive(Clone, Copy, Debug)]
 pub struct Dataset<'a> {
     inputs: &'a [f64],
@@ -23,8 +24,8 @@ impl<'a> Dataset<'a> {
     /// Wraps row-major `inputs` (N x d_in) and `targets` (N x d_out).
     ///
     /// Errors: zero widths, lengths that are not multiples of the widths, different row
-    /// counts, no rows, or a non-finite value ([`BroadError::NonFinite`] names the row and
-    /// column).
+    /// counts, no rows, a non-finite value ([`BroadError::NonFinite`]) or one beyond
+    /// [`MAX_ABS_DATA_VALUE`] ([`BroadError::OutOfRange`]); both name the row and column.
     pub fn new(
         inputs: &'a [f64],
         targets: &'a [f64],
@@ -70,8 +71,8 @@ impl<'a> Dataset<'a> {
         if n_samples == 0 {
             return Err(BroadError::Empty { what: "data set" });
         }
-        check_finite(inputs, d_in, "inputs")?;
-        check_finite(targets, d_out, "targets")?;
+        check_data(inputs, d_in, "inputs")?;
+        check_data(targets, d_out, "targets")?;
         Ok(Self {
             inputs,
             targets,
@@ -112,6 +113,45 @@ impl<'a> Dataset<'a> {
     /// Targets of rows `start..start + len`.
     pub(crate) fn target_rows(&self, start: usize, len: usize) -> &'a [f64] {
         &self.targets[start * self.d_out..(start + len) * self.d_out]
+    }
+}
+
+/// Largest magnitude a data value may have: 10^12. No joint angle, velocity, acceleration
+/// or torque in SI units comes near it; a value beyond it is a unit error or a corrupted
+/// field, and its square, summed over the rows, would overflow the fit's sums (10^300
+/// squared is infinite) and give a network of NaN.
+pub const MAX_ABS_DATA_VALUE: f64 = 1e12;
+
+/// Returns the first value that is not finite or beyond [`MAX_ABS_DATA_VALUE`] as an
+/// error naming its row and column.
+pub(crate) fn check_data(
+    values: &[f64],
+    width: usize,
+    what: &'static str,
+) -> Result<(), BroadError> {
+    // Fast path (vectorised): `!(|v| <= limit)` also catches NaN.
+    let mut ok = true;
+    for chunk in values.chunks(4096) {
+        let mut c = true;
+        for &v in chunk {
+            c &= v.abs() <= MAX_ABS_DATA_VALUE;
+        }
+        ok &= c;
+    }
+    if ok {
+        return Ok(());
+    }
+    check_finite(values, width, what)?;
+    // Finite here, so `>` is the complement of `<=`.
+    match values.iter().position(|v| v.abs() > MAX_ABS_DATA_VALUE) {
+        Some(idx) => Err(BroadError::OutOfRange {
+            what,
+            row: idx / width,
+            column: idx % width,
+            value: values[idx],
+            limit: MAX_ABS_DATA_VALUE,
+        }),
+        None => Ok(()),
     }
 }
 

@@ -1,5 +1,6 @@
 //! Error type of the broad network.
 
+use super::budget::format_bytes;
 use std::path::PathBuf;
 
 /// Everything that can go wrong when fitting, growing, evaluating, saving or loading a
@@ -34,6 +35,69 @@ pub enum BroadError {
         column: usize,
         /// The offending value.
         value: f64,
+    },
+    /// A value of a data set is beyond [`MAX_ABS_DATA_VALUE`](super::MAX_ABS_DATA_VALUE)
+    /// in magnitude (a unit error or a corrupted value: its square would overflow the
+    /// sums of the fit).
+    #[error("value {value:e} in {what}, row {row}, column {column}, is beyond +-{limit:e}")]
+    OutOfRange {
+        /// Which array (e.g. "training targets").
+        what: &'static str,
+        /// Row (sample) index, 0-based.
+        row: usize,
+        /// Column index, 0-based.
+        column: usize,
+        /// The offending value.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A fit or growth produced a non-finite weight or error measure; nothing was kept.
+    #[error("the fit is not finite: {0}")]
+    NonFiniteResult(String),
+    /// More enhancement nodes than training rows.
+    #[error("{nodes} nodes need at least as many training rows, the data have {rows}")]
+    TooManyNodes {
+        /// Nodes asked for.
+        nodes: usize,
+        /// Training rows.
+        rows: usize,
+    },
+    /// The estimated memory of a fit or growth is above the budget (or its byte count
+    /// overflows 64 bits: `needed_bytes` is `None`).
+    #[error("{nodes} nodes need {} of memory, more than the limit of {}", format_bytes(*.needed_bytes), format_bytes(Some(*.limit_bytes)))]
+    MemoryBudget {
+        /// Estimated peak memory, bytes; `None` beyond 64 bits.
+        needed_bytes: Option<u64>,
+        /// The limit, bytes.
+        limit_bytes: u64,
+        /// Nodes asked for.
+        nodes: usize,
+    },
+    /// The estimated work of a fit or growth is above the budget.
+    #[error("the fit needs about {needed_flop:.1e} floating-point operations, more than the limit of {limit_flop:.1e}")]
+    WorkBudget {
+        /// Estimated work.
+        needed_flop: f64,
+        /// The limit.
+        limit_flop: f64,
+    },
+    /// The model was trained for another arm (joint names or the arm model's fingerprint
+    /// differ); the message says what differs.
+    #[error("{0}")]
+    ArmMismatch(String),
+    /// The model was trained with other data settings (input filter, validation split,
+    /// target) than the user expects; the message lists them.
+    #[error("{0}")]
+    SettingsMismatch(String),
+    /// A path a model file may not be written to (a directory, a device, a FIFO, a file
+    /// that is not a model file...).
+    #[error("{}: {reason}", path.display())]
+    Destination {
+        /// The path.
+        path: PathBuf,
+        /// Why not.
+        reason: String,
     },
     /// A configuration value is out of its domain.
     #[error("invalid configuration: {0}")]
@@ -75,13 +139,13 @@ pub enum BroadError {
         reason: String,
     },
     /// A model file of a format version this build cannot read.
-    #[error("{}: unsupported format_version {found} (this build reads version {supported})", path.display())]
+    #[error("{}: unsupported format_version {found} (this build reads versions 1 to {supported})", path.display())]
     UnsupportedVersion {
         /// The file.
         path: PathBuf,
         /// Version found in the file.
         found: u64,
-        /// Version this build reads.
+        /// Newest version this build reads.
         supported: u64,
     },
     /// The checksum stored in a model file does not match its contents.

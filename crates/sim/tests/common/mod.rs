@@ -61,39 +61,3 @@ pub fn config(rate_hz: f64, integrator: Integrator) -> PlantConfig {
 }
 
 pub const INTEGRATORS: [Integrator; 2] = [Integrator::SemiImplicitEuler, Integrator::Rk4Split];
-
-/// A file of the project's `scenarios/` folder.
-pub fn scenario_path(name: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenarios")
-        .join(name)
-}
-
-/// A scalar metric of a variant (panics, naming it, when missing).
-pub fn number(run: &admittance_sim::scenario::VariantRun, key: &str) -> f64 {
-    run.metrics
-        .get(key)
-        .and_then(serde_json::Value::as_f64)
-        .unwrap_or_else(|| panic!("{}: metric `{key}` missing or not a number", run.name))
-}
-
-/// A per-joint metric of a variant (panics, naming it, when missing or of the wrong length).
-pub fn per_joint(run: &admittance_sim::scenario::VariantRun, key: &str) -> Vec<f64> {
-    let v = run
-        .metrics
-        .get(key)
-        .and_then(serde_json::Value::as_array)
-        .unwrap_or_else(|| panic!("{}: metric `{key}` missing or not an array", run.name));
-    assert_eq!(
-        v.len(),
-        run.joints.len(),
-        "{}: `{key}` has one value per joint",
-        run.name
-    );
-    v.iter()
-        .map(|x| {
-            x.as_f64()
-                .unwrap_or_else(|| panic!("{}: `{key}` holds a non-number", run.name))
-        })
-        .collect()
-}

@@ -1,0 +1,155 @@
+//! The rows of `train` and `grow`: the free-motion file read for the arm's joints, split
+//! into training and held-out rows, conditioned as at run time, and the network's target
+//! (the torque, or the nominal model's residual).
+
+use std::path::Path;
+
+use admittance_dynamics::{rnea, Data, Model};
+use admittance_learning::broad::{BroadError, Dataset};
+use admittance_scenario::{FreeMotionData, FreeMotionError};
+
+use super::args::learn_error;
+use crate::CliError;
+
+/// The joints named by the `q.*` columns of the file's header (for messages).
+fn file_joints(path: &Path) -> Option<Vec<String>> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).ok()?;
+    let header = std::io::BufReader::new(file)
+        .lines()
+        .map_while(Result::ok)
+        .find(|l| !l.trim().is_empty())?;
+    Some(
+        header
+            .split(',')
+            .filter_map(|c| c.trim().strip_prefix("q."))
+            .map(String::from)
+            .collect(),
+    )
+}
+
+/// Reads the file for `joints` (chain order; `None`: the file's `q.*` order). A missing
+/// joint column also lists the file's joints, as the arm's and the data's usually differ
+/// as a whole.
+pub fn load(path: &Path, joints: Option<&[String]>) -> Result<FreeMotionData, CliError> {
+    let result = match joints {
+        Some(j) => FreeMotionData::load_joints(path, j),
+        None => FreeMotionData::load(path),
+    };
+    result.map_err(|e| {
+        let mut message = e.to_string();
+        if let (FreeMotionError::MissingColumn { column, .. }, Some(j)) = (&e, joints) {
+            if column != "t" {
+                if let Some(found) = file_joints(path) {
+                    message.push_str(&format!(
+                        "; the file's joints are [{}], the arm's [{}]",
+                        found.join(", "),
+                        j.join(", ")
+                    ));
+                }
+            }
+        }
+        CliError::input(message)
+    })
+}
+
+/// Training rows: all but the last `fraction` (none held out without a fraction).
+pub fn training_rows(
+    path: &Path,
+    data: &FreeMotionData,
+    fraction: Option<f64>,
+) -> Result<usize, CliError> {
+    let Some(fraction) = fraction else {
+        return Ok(data.len());
+    };
+    let rows = ((data.len() as f64) * (1.0 - fraction)).floor() as usize;
+    if rows < 2 || rows >= data.len() {
+        return Err(CliError::input(format!(
+            "{}: {} rows are too few to hold out {fraction} of them for validation",
+            path.display(),
+            data.len()
+        )));
+    }
+    Ok(rows)
+}
+
+/// Inputs `[q, qdot, qddot]` and targets (row-major), through the input conditioning
+/// when `input_filter_hz > 0`; with `nominal`, the target is `tau - RNEA_nominal`.
+pub fn arrays(
+    path: &Path,
+    data: &FreeMotionData,
+    input_filter_hz: f64,
+    nominal: Option<&Model>,
+) -> Result<(Vec<f64>, Vec<f64>), CliError> {
+    let (x, mut y) =
+        admittance_scenario::observer_training_arrays(data, input_filter_hz).map_err(|e| {
+            CliError::usage(format!(
+                "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
+                path.display()
+            ))
+        })?;
+    if let Some(model) = nominal {
+        let n = data.dof();
+        let mut d = Data::new(model);
+        for (row, target) in x.chunks_exact(3 * n).zip(y.chunks_exact_mut(n)) {
+            let tau = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
+                .map_err(|e| CliError::input(format!("nominal model: {e}")))?;
+            for (t, m) in target.iter_mut().zip(tau.iter()) {
+                *t -= m;
+            }
+        }
+    }
+    Ok((x, y))
+}
+
+/// The training and held-out data sets of rows `..train_rows` and `train_rows..`
+/// (`None` when nothing is held out). A value that is not finite or beyond the limit
+/// (after the conditioning, which differentiates) names the data row and the column.
+pub fn datasets<'a>(
+    path: &Path,
+    data: &FreeMotionData,
+    (x, y): (&'a [f64], &'a [f64]),
+    train_rows: usize,
+    input_filter_hz: f64,
+) -> Result<(Dataset<'a>, Option<Dataset<'a>>), CliError> {
+    let n = data.dof();
+    let locate = |e: BroadError, offset: usize| -> CliError {
+        let (row, column, what) = match &e {
+            BroadError::NonFinite {
+                row, column, what, ..
+            }
+            | BroadError::OutOfRange {
+                row, column, what, ..
+            } => (*row, *column, *what),
+            _ => return learn_error(e),
+        };
+        let name = if what == "inputs" {
+            let signal = ["q", "qdot", "qddot"][(column / n).min(2)];
+            format!("{signal}.{}", data.joints[column % n])
+        } else {
+            format!("target of {}", data.joints[column % n])
+        };
+        let via = if input_filter_hz > 0.0 {
+            format!(" after the input conditioning (--input-filter-hz {input_filter_hz})")
+        } else {
+            String::new()
+        };
+        CliError::input(format!(
+            "{}: data row {} (t = {}), column `{name}`{via}: {e}",
+            path.display(),
+            offset + row + 1,
+            data.t[offset + row]
+        ))
+    };
+    let train = Dataset::new(&x[..train_rows * 3 * n], &y[..train_rows * n], 3 * n, n)
+        .map_err(|e| locate(e, 0))?;
+    let held_out = if train_rows < data.len() {
+        Some(
+            Dataset::new(&x[train_rows * 3 * n..], &y[train_rows * n..], 3 * n, n)
+                .map_err(|e| locate(e, train_rows))?,
+        )
+    } else {
+        None
+    };
+    Ok((train, held_out))
+}

@@ -1,0 +1,22 @@
+//! The task-space admittance (METHOD.md section 2, task-space variant; the paper's eq. 5 and
+//! eq. 19 `f_ext_hat = J^-T tau_ext_hat`; issue 16 part 1): compliance at the hand, driven
+//! by the joint-space external-torque estimate, mapped back to a joint reference.
+//!
+//! Rooms: `config.rs` (the serde configuration), `deviation.rs` (the admittance on the six
+//! task axes), `damped_inverse.rs` (the pseudo-inverse that stays bounded near
+//! singularities), `so3.rs` (rotation vectors), `hand.rs` (the hand's kinematics on the task
+//! axes), `admittance.rs` (the model: wrench estimate,
+//! admittance, inverse kinematics, saturation).
+
+mod admittance;
+mod config;
+mod damped_inverse;
+mod deviation;
+mod hand;
+mod so3;
+
+pub use admittance::{TaskSpaceAdmittance, TaskSpaceInput};
+pub use config::{
+    AxisAdmittanceConfig, InverseKinematicsConfig, SingularityDampingConfig, TaskAxis,
+    TaskSaturationConfig, TaskSpaceAdmittanceConfig,
+};

@@ -1,0 +1,352 @@
+//! Fitting the flat RBF network on free-motion data: standardisation, centres, one
+//! blocked Gram pass, a Cholesky solve per candidate lambda, the choice on validation data
+//! (METHOD.md section 5).
+
+use super::budget::{check_budget, FitSize};
+use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
+use super::config::BroadConfig;
+use super::data::{Dataset, Standardiser};
+use super::error::BroadError;
+use super::features::{FeatureMap, NodeSet};
+use super::gram::{accumulate_gram, prediction_sse};
+use super::model::{
+    check_finite_result, nrmse, par_for, target_std, train_nrmse, BroadModel, GrowthState,
+};
+use super::provenance::{CentreSettings, FitSettings, Provenance};
+use super::solve::{factor, solve};
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Seconds spent in each phase of a fit.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PhaseTimes {
+    /// Standardisation statistics (and data checks).
+    pub standardise_s: f64,
+    /// Subsample, k-means++ seeding and widths.
+    pub centres_s: f64,
+    /// Features and Gram accumulation (one pass over the training data).
+    pub gram_s: f64,
+    /// Cholesky factorisations and solves for all lambdas.
+    pub solve_s: f64,
+    /// Validation predictions for all lambdas (one pass over the validation data).
+    pub validation_s: f64,
+    /// Everything.
+    pub total_s: f64,
+}
+
+/// Validation score of one candidate lambda.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LambdaScore {
+    /// Relative lambda (from the grid).
+    pub lambda_rel: f64,
+    /// Absolute lambda `lambda_rel * N`.
+    pub lambda: f64,
+    /// False when `G + lambda D` was not numerically positive definite (candidate skipped).
+    pub factorised: bool,
+    /// Per-output validation NRMSE (empty without validation set or when not factorised).
+    pub validation_nrmse: Vec<f64>,
+    /// Mean of `validation_nrmse` over the outputs (the selection criterion).
+    pub mean_nrmse: Option<f64>,
+}
+
+/// What [`fit`] did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    /// Training rows N.
+    pub samples: usize,
+    /// Validation rows (0 without validation set).
+    pub validation_samples: usize,
+    /// Enhancement nodes L.
+    pub nodes: usize,
+    /// Pattern width P = d_in + F + 1 + L.
+    pub pattern_width: usize,
+    /// Chosen absolute lambda.
+    pub lambda: f64,
+    /// Chosen relative lambda.
+    pub lambda_rel: f64,
+    /// All candidates.
+    pub lambda_scan: Vec<LambdaScore>,
+    /// Per-output validation NRMSE at the chosen lambda (RMSE / std of the validation
+    /// target; RMSE itself where that std is 0). Empty without validation set.
+    pub validation_nrmse: Vec<f64>,
+    /// Per-output training NRMSE at the chosen lambda (from the Gram terms).
+    pub train_nrmse: Vec<f64>,
+    /// Time per phase.
+    pub times: PhaseTimes,
+}
+
+fn check_same_widths(train: &Dataset<'_>, other: &Dataset<'_>) -> Result<(), BroadError> {
+    if other.d_in() != train.d_in() {
+        return Err(BroadError::Dimension {
+            what: "validation input width",
+            expected: train.d_in(),
+            got: other.d_in(),
+        });
+    }
+    if other.d_out() != train.d_out() {
+        return Err(BroadError::Dimension {
+            what: "validation output width",
+            expected: train.d_out(),
+            got: other.d_out(),
+        });
+    }
+    Ok(())
+}
+
+/// Fits the flat RBF network of METHOD.md section 5 on `train`:
+/// standardisation with the training statistics, centres by k-means++ seeding on a random
+/// subsample, widths by `config.widths`, one blocked pass accumulating `G = A^T A` and
+/// `A^T Y`, then for every lambda of `config.lambda_grid` a Cholesky solve of
+/// `(G + lambda D) W = A^T Y` (bias not regularised). With a validation set, every
+/// candidate is scored by the mean over outputs of the validation NRMSE (one more blocked
+/// pass, all candidates at once) and the best is kept; the Gram does not depend on lambda,
+/// so the scan costs a few factorisations, not refits. Without a validation set the grid
+/// must hold exactly one value.
+pub fn fit(
+    train: &Dataset<'_>,
+    validation: Option<&Dataset<'_>>,
+    config: &BroadConfig,
+) -> Result<(BroadModel, FitReport), BroadError> {
+    let t0 = Instant::now();
+    config.validate(train.d_in())?;
+    if let Some(v) = validation {
+        check_same_widths(train, v)?;
+    }
+    if validation.is_none() && config.lambda_grid.len() > 1 {
+        return Err(BroadError::NeedValidation(config.lambda_grid.len()));
+    }
+    let size = FitSize::fit(
+        train.n_samples(),
+        validation.map_or(0, |v| v.n_samples()),
+        train.d_in(),
+        train.d_out(),
+        config,
+    );
+    check_budget(&size, &config.budget)?;
+    let standardiser = Standardiser::from_data(train);
+    let t_std = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let mut rng = rng_from_seed(config.seed);
+    let (pts_t, m) =
+        subsample_standardised(train, &standardiser, config.centre_subsample, &mut rng);
+    let d = train.d_in();
+    let centres = kmeanspp(&pts_t, m, d, &[], config.nodes, &mut rng);
+    drop(pts_t);
+    let widths = compute_widths(&centres, d, 0, &[], &config.widths);
+    let nodes = NodeSet {
+        dim: d,
+        centres,
+        widths,
+    };
+    let t_centres = t1.elapsed().as_secs_f64();
+    let mut times = PhaseTimes {
+        standardise_s: t_std,
+        centres_s: t_centres,
+        ..Default::default()
+    };
+    let centres = CentreSettings {
+        centre_subsample: config.centre_subsample,
+        seed: config.seed,
+        widths: config.widths.clone(),
+    };
+    let out = fit_inner(
+        train,
+        validation,
+        config,
+        standardiser,
+        nodes,
+        Some(centres),
+        &mut times,
+    );
+    times.total_s = t0.elapsed().as_secs_f64();
+    out.map(|(m, mut r)| {
+        r.times = times;
+        (m, r)
+    })
+}
+
+/// Like [`fit`] but with given enhancement nodes (centres in standardised units of the
+/// training statistics, widths), e.g. to reproduce a fit exactly or to retrain on a grown
+/// node set. `config.nodes`, `centre_subsample`, `seed` and `widths` are ignored.
+pub fn fit_with_nodes(
+    train: &Dataset<'_>,
+    validation: Option<&Dataset<'_>>,
+    config: &BroadConfig,
+    nodes: &NodeSet,
+) -> Result<(BroadModel, FitReport), BroadError> {
+    let t0 = Instant::now();
+    config.validate(train.d_in())?;
+    nodes.validate(train.d_in())?;
+    if let Some(v) = validation {
+        check_same_widths(train, v)?;
+    }
+    if validation.is_none() && config.lambda_grid.len() > 1 {
+        return Err(BroadError::NeedValidation(config.lambda_grid.len()));
+    }
+    let mut size = FitSize::fit(
+        train.n_samples(),
+        validation.map_or(0, |v| v.n_samples()),
+        train.d_in(),
+        train.d_out(),
+        config,
+    );
+    size.nodes = nodes.len();
+    check_budget(&size, &config.budget)?;
+    let standardiser = Standardiser::from_data(train);
+    let mut times = PhaseTimes {
+        standardise_s: t0.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+    let out = fit_inner(
+        train,
+        validation,
+        config,
+        standardiser,
+        nodes.clone(),
+        None,
+        &mut times,
+    );
+    times.total_s = t0.elapsed().as_secs_f64();
+    out.map(|(m, mut r)| {
+        r.times = times;
+        (m, r)
+    })
+}
+
+fn fit_inner(
+    train: &Dataset<'_>,
+    validation: Option<&Dataset<'_>>,
+    config: &BroadConfig,
+    standardiser: Standardiser,
+    nodes: NodeSet,
+    centres: Option<CentreSettings>,
+    times: &mut PhaseTimes,
+) -> Result<(BroadModel, FitReport), BroadError> {
+    let threads = config.thread_count();
+    let par = par_for(threads);
+    let fm = FeatureMap::new(standardiser, config.friction.clone(), nodes);
+    let p = fm.width();
+    let d_out = train.d_out();
+    let n = train.n_samples();
+    let bias = fm.bias_index();
+
+    let t = Instant::now();
+    let acc = accumulate_gram(&fm, train, config.block_rows, threads, config.gram_strategy);
+    times.gram_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut scan = Vec::with_capacity(config.lambda_grid.len());
+    let mut solutions: Vec<(usize, Mat<f64>)> = Vec::new();
+    for (c, &rel) in config.lambda_grid.iter().enumerate() {
+        let lambda = rel * n as f64;
+        let ok = match factor(acc.g.as_ref(), lambda, bias, par) {
+            Some(l) => {
+                solutions.push((c, solve(l.as_ref(), acc.aty.as_ref(), par)));
+                true
+            }
+            None => false,
+        };
+        scan.push(LambdaScore {
+            lambda_rel: rel,
+            lambda,
+            factorised: ok,
+            validation_nrmse: Vec::new(),
+            mean_nrmse: None,
+        });
+    }
+    if solutions.is_empty() {
+        return Err(BroadError::NotPositiveDefinite {
+            tried: scan.iter().map(|s| s.lambda).collect(),
+        });
+    }
+    times.solve_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut chosen = 0usize; // index into `solutions`
+    let mut validation_nrmse = Vec::new();
+    if let Some(val) = validation {
+        let mut w_all = Mat::<f64>::zeros(p, solutions.len() * d_out);
+        for (i, (_, w)) in solutions.iter().enumerate() {
+            w_all.as_mut().subcols_mut(i * d_out, d_out).copy_from(w);
+        }
+        let sse = prediction_sse(
+            &fm,
+            val,
+            w_all.as_ref(),
+            config.block_rows,
+            threads,
+            config.gram_strategy,
+        );
+        let std = target_std(val);
+        let mut best = f64::INFINITY;
+        for (i, (c, _)) in solutions.iter().enumerate() {
+            let e = nrmse(&sse[i * d_out..(i + 1) * d_out], val.n_samples(), &std);
+            let mean = e.iter().sum::<f64>() / d_out as f64;
+            if mean < best {
+                best = mean;
+                chosen = i;
+            }
+            scan[*c].validation_nrmse = e;
+            scan[*c].mean_nrmse = Some(mean);
+        }
+        validation_nrmse = scan[solutions[chosen].0].validation_nrmse.clone();
+    }
+    times.validation_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let (c, w) = solutions.swap_remove(chosen);
+    drop(solutions);
+    let lambda = scan[c].lambda;
+    let chol = factor(acc.g.as_ref(), lambda, bias, par).ok_or_else(|| {
+        BroadError::NotPositiveDefinite {
+            tried: vec![lambda],
+        }
+    })?;
+    let state = GrowthState {
+        gram: acc.g,
+        aty: acc.aty,
+        chol,
+        n_samples: n,
+        y_sum: acc.y_sum,
+        y_sq: acc.y_sq,
+    };
+    let train_e = train_nrmse(&state, w.as_ref());
+    times.solve_s += t.elapsed().as_secs_f64();
+    check_finite_result(w.as_ref(), &validation_nrmse, &train_e)?;
+
+    let fit_settings = FitSettings {
+        nodes: fm.n_nodes(),
+        centres,
+        lambda_grid: config.lambda_grid.clone(),
+        training_rows: n,
+        validation_rows: validation.map_or(0, |v| v.n_samples()),
+    };
+    let mut model = BroadModel {
+        fm,
+        d_out,
+        lambda,
+        lambda_rel: scan[c].lambda_rel,
+        w: Vec::new(),
+        wt: Vec::new(),
+        state: Some(state),
+        provenance: Provenance {
+            fit: Some(fit_settings),
+            ..Provenance::default()
+        },
+    };
+    model.set_weights(w.as_ref());
+    let report = FitReport {
+        samples: n,
+        validation_samples: validation.map(|v| v.n_samples()).unwrap_or(0),
+        nodes: model.n_nodes(),
+        pattern_width: p,
+        lambda,
+        lambda_rel: scan[c].lambda_rel,
+        lambda_scan: scan,
+        validation_nrmse,
+        train_nrmse: train_e,
+        times: PhaseTimes::default(),
+    };
+    Ok((model, report))
+}

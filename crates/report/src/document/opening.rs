@@ -1,0 +1,453 @@
+//! How a report opens: the experiment, the paper's claim, and this run's headline numbers
+//! beside the paper's (with whether they agree where the paper gives a bound or a
+//! direction). The paper's numbers are those of its text (Section V).
+
+use admittance_runfolder::{columns, metrics as m};
+
+use super::blocks::Block;
+use super::values::{fmt_num, num};
+use crate::experiment::{has_hand_columns, Experiment};
+use crate::figures::short_name;
+use crate::folder::{RunFolder, Variant};
+use crate::number::setting;
+
+/// The metrics the warnings read; a summary without them could not be checked.
+const CHECKED: [&str; 4] = [
+    m::DIVERGED,
+    m::Q_LIMIT_VIOLATION_FRACTION,
+    m::TORQUE_SATURATION_FRACTION,
+    m::ESTIMATE_SATURATION_FRACTION,
+];
+
+/// A headline row: quantity, the paper's value, this run's, whether they agree.
+type Row = [String; 4];
+
+fn row(quantity: &str, paper: &str, ours: String, agrees: &str) -> Row {
+    [quantity.into(), paper.into(), ours, agrees.into()]
+}
+
+fn yes_no(ok: bool) -> &'static str {
+    if ok {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+/// The value of a per-joint metric at joint `index`.
+fn joint_value(v: &Variant, name: &str, index: usize) -> Option<f64> {
+    super::values::per_joint(v, name)?
+        .get(index)
+        .copied()
+        .flatten()
+}
+
+/// `a / b = ×r` for a compared pair of variants on joint s0.
+fn s0_ratio(folder: &RunFolder, with: &str, without: &str) -> Option<(String, bool)> {
+    let (a, b) = (folder.variant(with)?, folder.variant(without)?);
+    let (x, y) = (
+        joint_value(a, m::TRACKING_RMSE, 0)?,
+        joint_value(b, m::TRACKING_RMSE, 0)?,
+    );
+    let band = folder
+        .deadzone(with, &folder.joints[0])
+        .map_or(String::new(), |(l, r)| {
+            format!(", deadzone [{}, {}] N m", setting(l), setting(r))
+        });
+    Some((
+        format!(
+            "{} / {} rad = ×{:.2} (`{with}` / `{without}`{band})",
+            fmt_num(x),
+            fmt_num(y),
+            x / y
+        ),
+        x < y,
+    ))
+}
+
+fn deadzone(folder: &RunFolder) -> (String, Vec<Row>) {
+    let claim = "With the neural network compensating the actuator deadzone, joint s0 tracks better than without compensation (Figs 9-11), and the hand follows its desired path with an error below 0.04 m (Figs 7-8).";
+    let mut rows = Vec::new();
+    if let Some(x) = folder
+        .variant("nn_compensated")
+        .and_then(|v| num(v, m::EE_ERROR_MAX))
+    {
+        rows.push(row(
+            "hand position error with compensation, largest (t ≥ evaluation start)",
+            "below 0.04 m",
+            format!("{} m (`nn_compensated`)", fmt_num(x)),
+            yes_no(x < 0.04),
+        ));
+    }
+    if let Some((text, ok)) = s0_ratio(folder, "nn_compensated", "nn_uncompensated") {
+        rows.push(row(
+            "s0 tracking RMSE, compensated / uncompensated",
+            "smaller with compensation",
+            text,
+            yes_no(ok),
+        ));
+    }
+    if let Some((text, ok)) = s0_ratio(folder, "nn_compensated_wide", "nn_uncompensated_wide") {
+        rows.push(row(
+            "the same with a wide deadzone (not in the paper)",
+            "–",
+            text,
+            yes_no(ok),
+        ));
+    }
+    (claim.into(), rows)
+}
+
+/// `VARIANT value` for every variant that has the metric.
+fn per_variant(folder: &RunFolder, name: &str, unit: &str) -> Option<String> {
+    let parts: Vec<String> = folder
+        .variants
+        .iter()
+        .filter_map(|v| num(v, name).map(|x| format!("`{}` {}{unit}", v.name, fmt_num(x))))
+        .collect();
+    (!parts.is_empty()).then(|| parts.join("; "))
+}
+
+fn admittance(folder: &RunFolder) -> (String, Vec<Row>) {
+    let claim = "A network trained on free motion estimates the external torque without a force sensor (Figs 15, 17) well enough to drive the admittance model: the reference yields while the environment acts (12-30 s, Figs 18-19), and the saturation keeps it inside its bound (Fig 20).";
+    let mut rows = Vec::new();
+    if let Some(text) = per_variant(folder, m::EXTERNAL_TORQUE_NRMSE, "") {
+        rows.push(row(
+            "external-torque estimate in contact, NRMSE (0 is exact)",
+            "follows the true torque (Fig 17); no number",
+            text,
+            "–",
+        ));
+    }
+    let trained = folder.variant("learned").or_else(|| {
+        folder
+            .variants
+            .iter()
+            .find(|v| num(v, m::TRAIN_SECONDS).is_some())
+    });
+    if let Some(v) = trained {
+        if let Some(s) = num(v, m::TRAIN_SECONDS) {
+            let nodes = num(v, m::OBSERVER_NODES)
+                .map_or(String::new(), |n| format!(", {} nodes", fmt_num(n)));
+            let rows_used = num(v, m::TRAINING_SAMPLES)
+                .map_or(String::new(), |n| format!(", {} rows", fmt_num(n)));
+            rows.push(row(
+                "time to train the observer's network",
+                "5.088 s (1000 nodes)",
+                format!(
+                    "{} s (`{}`{nodes}{rows_used}; another machine)",
+                    fmt_num(s),
+                    v.name
+                ),
+                "–",
+            ));
+        }
+    }
+    if folder.has_saturation() {
+        let counts: Vec<(String, f64)> = folder
+            .variants
+            .iter()
+            .filter_map(|v| num(v, m::REFERENCE_BOUND_VIOLATIONS).map(|n| (v.name.clone(), n)))
+            .collect();
+        if !counts.is_empty() {
+            let bad: Vec<String> = counts
+                .iter()
+                .filter(|(_, n)| *n > 0.0)
+                .map(|(v, n)| format!("`{v}` {}", fmt_num(*n)))
+                .collect();
+            let ours = if bad.is_empty() {
+                "0 samples outside, every variant".to_string()
+            } else {
+                format!("samples × joints outside: {}", bad.join("; "))
+            };
+            rows.push(row(
+                "q_r inside its saturation bound",
+                "yes (Fig 20)",
+                ours,
+                yes_no(bad.is_empty()),
+            ));
+        }
+    }
+    (claim.into(), rows)
+}
+
+fn dynamic_nodes(folder: &RunFolder) -> (String, Vec<Row>) {
+    let claim = "Discarding the nodes whose centres are far from the trajectory costs little approximation accuracy (Fig 21), and adding nodes near the trajectory improves it (Fig 24); the weights converge (Figs 22-26).";
+    let mut rows = Vec::new();
+    let Some(v) = folder.variant("dynamic").or(folder.variants.first()) else {
+        return (claim.into(), rows);
+    };
+    let initial = v
+        .table
+        .col(columns::NODES_F)
+        .and_then(|c| c.first().copied());
+    if let Some(d) = num(v, m::NODES_DISCARDED) {
+        let of = initial.map_or(String::new(), |n| format!(" of {}", fmt_num(n)));
+        rows.push(row(
+            "nodes discarded",
+            "208 of 512",
+            format!("{}{of}", fmt_num(d)),
+            "–",
+        ));
+    }
+    let rmse = |name| num(v, name);
+    if let (Some(full), Some(after)) = (
+        rmse(m::APPROX_RMSE_FULL),
+        rmse(m::APPROX_RMSE_AFTER_DISCARD),
+    ) {
+        let change = after / full - 1.0;
+        rows.push(row(
+            "approximation error after the discard against before (RMS of f - f_hat)",
+            "\"affected little\"",
+            format!(
+                "{} against {} N m ({:+.1} %)",
+                fmt_num(after),
+                fmt_num(full),
+                100.0 * change
+            ),
+            if change.abs() <= 0.1 {
+                "yes (within 10 %)"
+            } else {
+                "no (over 10 %)"
+            },
+        ));
+    }
+    if let Some(n) = num(v, m::NODES_ADDED) {
+        rows.push(row(
+            "nodes added near the trajectory",
+            "100",
+            fmt_num(n),
+            "–",
+        ));
+    }
+    if let (Some(after), Some(grown)) = (
+        rmse(m::APPROX_RMSE_AFTER_DISCARD),
+        rmse(m::APPROX_RMSE_AFTER_GROWTH),
+    ) {
+        let change = grown / after - 1.0;
+        rows.push(row(
+            "approximation error after growth against after the discard",
+            "better",
+            format!(
+                "{} against {} N m ({:+.1} %)",
+                fmt_num(grown),
+                fmt_num(after),
+                100.0 * change
+            ),
+            yes_no(change < 0.0),
+        ));
+    }
+    (claim.into(), rows)
+}
+
+/// The paper's motion range of the Baxter arm (Section V-B), joint order s0 .. w2.
+const PAPER_BOX: [(f64, f64); 7] = [
+    (-1.7, 1.7),
+    (-2.14, 1.05),
+    (-3.05, 3.05),
+    (-0.15, 2.61),
+    (-3.05, 3.05),
+    (-1.57, 2.09),
+    (-3.05, 3.05),
+];
+
+fn data_run(folder: &RunFolder, validation: bool) -> (String, Vec<Row>) {
+    let claim = if validation {
+        "Validation data for the learned observer: a trajectory like the training one with different amplitudes and periods, in the same joint box (Fig 14)."
+    } else {
+        "Training data for the learned observer: the arm moves freely, excited in the paper's joint box, recorded as the observer will see it (Fig 13)."
+    };
+    let mut rows = Vec::new();
+    let table = folder
+        .free_motion
+        .first()
+        .map(|(_, t)| t)
+        .or(folder.variants.first().map(|v| &v.table));
+    let Some(table) = table else {
+        return (claim.into(), rows);
+    };
+    if let Some(end) = table.col(columns::TIME).and_then(|t| t.last()) {
+        rows.push(row(
+            "duration",
+            if validation { "not given" } else { "450 s" },
+            format!("{} s, {} samples", fmt_num(*end), table.rows()),
+            "–",
+        ));
+    }
+    if folder.joints.len() == PAPER_BOX.len() {
+        let outside: Vec<String> = folder
+            .joints
+            .iter()
+            .zip(PAPER_BOX)
+            .filter_map(|(j, (lo, hi))| {
+                let q = table.col(&columns::joint(columns::POSITION, j))?;
+                let (a, b) = q
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    });
+                (a < lo || b > hi)
+                    .then(|| format!("{} [{}, {}]", short_name(j), fmt_num(a), fmt_num(b)))
+            })
+            .collect();
+        let ours = if outside.is_empty() {
+            "every joint inside".to_string()
+        } else {
+            format!("outside: {}", outside.join(", "))
+        };
+        rows.push(row(
+            "joint angles inside the paper's motion range",
+            "[-1.7, 1.7] × [-2.14, 1.05] × [-3.05, 3.05] × [-0.15, 2.61] × [-3.05, 3.05] × [-1.57, 2.09] × [-3.05, 3.05] rad",
+            ours,
+            yes_no(outside.is_empty()),
+        ));
+    }
+    (claim.into(), rows)
+}
+
+fn hand_contact(folder: &RunFolder) -> (String, Vec<Row>) {
+    let claim = "Task-space contact (not in the paper): the force on the hand estimated without a force sensor, J^+T tau_ext_hat, against the true contact force.";
+    let mut rows = Vec::new();
+    for (name, what, unit) in [
+        (
+            m::WRENCH_ESTIMATE_NRMSE,
+            "hand-force estimate in contact, NRMSE",
+            "",
+        ),
+        (
+            m::FALSE_FORCE_RMS,
+            "estimated hand force without contact, RMS",
+            " N",
+        ),
+        (m::CONTACT_FORCE_MAX, "largest true contact force", " N"),
+    ] {
+        if let Some(text) = per_variant(folder, name, unit) {
+            rows.push(row(what, "–", text, "–"));
+        }
+    }
+    (claim.into(), rows)
+}
+
+fn other(folder: &RunFolder) -> (String, Vec<Row>) {
+    let claim = format!(
+        "Scenario `{}` is not one of the paper's experiments: the report shows its metrics and generic figures.",
+        folder.scenario
+    );
+    let mut rows = Vec::new();
+    let worst: Vec<String> = folder
+        .variants
+        .iter()
+        .filter_map(|v| {
+            let list = super::values::per_joint(v, m::TRACKING_RMSE)?;
+            let (k, x) = list
+                .iter()
+                .enumerate()
+                .filter_map(|(k, x)| x.map(|x| (k, x)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))?;
+            let j = folder.joints.get(k).map_or("?", |j| short_name(j));
+            Some(format!("`{}` {} rad ({j})", v.name, fmt_num(x)))
+        })
+        .collect();
+    if !worst.is_empty() {
+        rows.push(row(
+            "largest joint tracking RMSE",
+            "–",
+            worst.join("; "),
+            "–",
+        ));
+    }
+    if let Some(text) = per_variant(folder, m::EE_ERROR_RMS, " m") {
+        rows.push(row("hand position error, RMS", "–", text, "–"));
+    }
+    if let Some(text) = per_variant(folder, m::EXTERNAL_TORQUE_NRMSE, "") {
+        rows.push(row(
+            "external-torque estimate in contact, NRMSE",
+            "–",
+            text,
+            "–",
+        ));
+    }
+    (claim, rows)
+}
+
+/// The title of the report.
+pub fn title(folder: &RunFolder) -> String {
+    let what = match Experiment::of(folder) {
+        Experiment::Deadzone => "Experiment A: deadzone compensation".to_string(),
+        Experiment::Admittance { mujoco: false } => {
+            "Experiment B: force-sensorless admittance".to_string()
+        }
+        Experiment::Admittance { mujoco: true } => {
+            "Experiment B on the MuJoCo plant (co-simulation)".to_string()
+        }
+        Experiment::DynamicNodes => "Experiment C: dynamic RBF nodes".to_string(),
+        Experiment::TrainingData => "Experiment B: the observer's training data".to_string(),
+        Experiment::ValidationData => "Experiment B: the observer's validation data".to_string(),
+        Experiment::Other if has_hand_columns(folder) => "Task-space contact".to_string(),
+        Experiment::Other => "A scenario outside the paper".to_string(),
+    };
+    format!("{what} (scenario `{}`)", folder.scenario)
+}
+
+/// The opening blocks: title, description, claim, headline table, warnings.
+pub fn blocks(folder: &RunFolder, warnings: Vec<String>) -> Vec<Block<'static>> {
+    let (claim, rows) = match Experiment::of(folder) {
+        Experiment::Deadzone => deadzone(folder),
+        Experiment::Admittance { .. } => admittance(folder),
+        Experiment::DynamicNodes => dynamic_nodes(folder),
+        Experiment::TrainingData => data_run(folder, false),
+        Experiment::ValidationData => data_run(folder, true),
+        Experiment::Other if has_hand_columns(folder) => hand_contact(folder),
+        Experiment::Other => other(folder),
+    };
+    let mut out = vec![Block::Title(title(folder))];
+    if let Some(d) = folder.description() {
+        out.push(Block::Paragraph(d.to_string()));
+    }
+    let paper = if matches!(Experiment::of(folder), Experiment::Other) {
+        "**Claim.**"
+    } else {
+        "**The paper's claim.**"
+    };
+    out.push(Block::Paragraph(format!("{paper} {claim}")));
+    if rows.is_empty() {
+        out.push(Block::Paragraph(
+            "This run's summary has none of the headline metrics.".into(),
+        ));
+    } else {
+        out.push(Block::Table {
+            header: ["quantity", "paper", "this run", "agrees"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            rows: rows.into_iter().map(Vec::from).collect(),
+        });
+    }
+    if warnings.is_empty() {
+        let mut text = "No warnings: no divergence, limit, saturation or fault was recorded, every metric is finite and every sample was drawn.".to_string();
+        let missing: Vec<&str> = CHECKED
+            .iter()
+            .copied()
+            .filter(|name| {
+                folder
+                    .variants
+                    .iter()
+                    .all(|v| !v.metrics.contains_key(*name))
+            })
+            .collect();
+        if !missing.is_empty() {
+            text.push_str(&format!(
+                " This summary does not have {} (a run folder written before them, or a plant that does not report them), so those were not checked.",
+                missing
+                    .iter()
+                    .map(|n| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        out.push(Block::Paragraph(text));
+    } else {
+        out.push(Block::Warnings(warnings));
+    }
+    out
+}

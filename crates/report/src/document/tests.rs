@@ -1,0 +1,289 @@
+use serde_json::{json, Value};
+
+use super::*;
+use crate::folder::Variant;
+use crate::table::Table;
+
+const JOINTS: [&str; 2] = ["left_s0", "left_s1"];
+
+fn variant(name: &str, metrics: Value) -> Variant {
+    let t: Vec<f64> = (0..10).map(|k| k as f64).collect();
+    let mut columns = vec!["t".to_string(), "nodes.f".into()];
+    let mut data = vec![t.clone(), vec![512.0; 10]];
+    for j in JOINTS {
+        columns.push(format!("q.{j}"));
+        data.push(t.iter().map(|x| 0.1 * x).collect());
+    }
+    Variant {
+        name: name.into(),
+        metrics: metrics.as_object().cloned().unwrap(),
+        table: Table::from_columns(columns, data),
+    }
+}
+
+fn folder(scenario: &str, variants: Vec<Variant>, toml: &str) -> RunFolder {
+    RunFolder {
+        dir: ".".into(),
+        scenario: scenario.into(),
+        plant: None,
+        joints: JOINTS.iter().map(|s| s.to_string()).collect(),
+        variants,
+        warnings: Vec::new(),
+        scenario_toml: Some(toml.parse().unwrap()),
+        free_motion: Vec::new(),
+        node_weights: Vec::new(),
+        observer_validation: Vec::new(),
+    }
+}
+
+fn md(f: &RunFolder) -> String {
+    markdown(f, &[], None)
+}
+
+/// The part of the report before the metrics: the opening.
+fn opening(f: &RunFolder) -> String {
+    let text = md(f);
+    text[..text.find("## Metrics").unwrap()].to_string()
+}
+
+fn clean(extra: Value) -> Value {
+    let mut m = json!({
+        "tracking_rmse": [0.0015, 0.0003],
+        "ee_error_max": 0.0014,
+        "ee_error_rms": 0.0009,
+        "external_torque_rmse": [0.0, 0.0],
+        "external_torque_nrmse": null,
+        "faults": 0,
+        "observer_faults": 0,
+        "diverged": false,
+        "diverged_at": null,
+        "q_limit_violation_fraction": [0.0, 0.0],
+        "steps": 1000,
+        "nodes": {"f": 512},
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        m[k] = v.clone();
+    }
+    m
+}
+
+#[test]
+fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
+    let f = folder(
+        "deadzone",
+        vec![
+            variant("nn_compensated", clean(json!({}))),
+            variant("nn_uncompensated", clean(json!({"tracking_rmse": [0.002, 0.0004]}))),
+        ],
+        "description = \"Experiment A\"\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n",
+    );
+    let top = opening(&f);
+    assert!(
+        top.starts_with("# Experiment A: deadzone compensation"),
+        "{top}"
+    );
+    assert!(
+        top.contains("below 0.04 m") && top.contains("0.001400 m"),
+        "{top}"
+    );
+    assert!(top.contains("×0.75"), "the s0 ratio 0.0015 / 0.002: {top}");
+    assert!(top.contains("| yes |"), "{top}");
+    assert!(top.contains("No warnings"), "{top}");
+    // Metrics this summary lacks are named: they could not be checked.
+    assert!(
+        top.contains("does not have `torque_saturation_fraction`, `estimate_saturation_fraction`"),
+        "{top}"
+    );
+    assert!(!top.contains("Warning:"), "{top}");
+}
+
+#[test]
+fn every_problem_is_a_warning_at_the_top() {
+    let bad = clean(json!({
+        "diverged": true,
+        "diverged_at": 12.5,
+        "q_limit_violation_fraction": [0.0, 0.032],
+        "torque_saturation_fraction": [0.5, 0.0],
+        "estimate_saturation_fraction": [0.0, 0.001],
+        "faults": 3,
+        "stale_measurements": 7,
+        "ee_error_rms": null,
+        "tracking_rmse": [0.1, null],
+    }));
+    let mut f = folder(
+        "something",
+        vec![variant("ok", clean(json!({}))), variant("bad", bad)],
+        "",
+    );
+    f.warnings.push("link `x` has no inertia".into());
+    let top = opening(&f);
+    for words in [
+        "`bad` **diverged** at t = 12.50 s",
+        "joints outside their joint limits for part of the run: s1 3.20 %",
+        "commanded at the effort limit for part of the run: s0 50.0 %",
+        "estimate beyond the effort limit for part of the run: s1 0.10 %",
+        "`bad`: 3 control steps with a controller fault",
+        "`bad`: 7 control steps with a stale encoder reading",
+        "not finite (null in summary.json): `ee_error_rms`, `tracking_rmse` of s1",
+        "the arm's description: link `x` has no inertia",
+    ] {
+        assert!(top.contains(words), "missing `{words}` in:\n{top}");
+    }
+    assert!(
+        !top.contains("**Warning:** `ok`"),
+        "the clean variant has no warning:\n{top}"
+    );
+    // A null that means "no contact" is not a warning.
+    assert!(!top.contains("external_torque_nrmse"), "{top}");
+    // The HTML has the same warnings, highlighted.
+    let html = html(&f, &[], None);
+    assert!(html.contains("<div class=\"warnings\">") && html.contains("<b>diverged</b>"));
+}
+
+#[test]
+fn metrics_tables_have_units_windows_joint_columns_and_the_scenario_order() {
+    let f = folder(
+        "deadzone",
+        vec![
+            variant("nn_compensated", clean(json!({"deadzone_time_fraction": [0.04, 0.0]}))),
+            variant("nn_uncompensated", clean(json!({"deadzone_time_fraction": [0.036, 0.0]}))),
+            variant("pd", clean(json!({"deadzone_time_fraction": [0.05, 0.0]}))),
+        ],
+        "evaluation_start = 20\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n",
+    );
+    let text = md(&f);
+    let metrics = &text[text.find("## Metrics").unwrap()..text.find("## Figures").unwrap()];
+    // Variants as columns in the folder's (scenario's) order.
+    assert!(
+        metrics
+            .contains("| metric | unit | window | `nn_compensated` | `nn_uncompensated` | `pd` |"),
+        "{metrics}"
+    );
+    assert!(
+        metrics.contains("| `ee_error_max` | m | t ≥ 20 s | 0.001400 |"),
+        "{metrics}"
+    );
+    // Per joint: one column per joint, no comma lists.
+    assert!(
+        metrics.contains("| metric (unit, window) | variant | s0 | s1 |"),
+        "{metrics}"
+    );
+    assert!(
+        metrics.contains(
+            "| `tracking_rmse` (rad, t ≥ 20 s) | `nn_compensated` | 0.001500 | 3.000e-4 |"
+        ),
+        "{metrics}"
+    );
+    assert!(!metrics.contains("0.001500, "), "{metrics}");
+    // Fractions in %, and a joint without a deadzone blank.
+    assert!(
+        metrics
+            .contains("| `deadzone_time_fraction` (%, t ≥ 20 s) | `nn_compensated` | 4.00 % | – |"),
+        "{metrics}"
+    );
+    // Rows that do not apply are left out: no estimate, no contact.
+    assert!(!metrics.contains("external_torque"), "{metrics}");
+    // Checks that passed are one line, not rows.
+    assert!(metrics.contains("**Checks passed in every variant** (whole run): no divergence, no controller faults, no observer faults, every joint inside its limits."), "{metrics}");
+    assert!(!metrics.contains("| `faults`"), "{metrics}");
+    // Run details: objects one row per key.
+    assert!(
+        metrics.contains("| `nodes` (f) |  | 512 | 512 | 512 |"),
+        "{metrics}"
+    );
+    // A check that failed is a row.
+    let mut f = f;
+    f.variants[2].metrics.insert("faults".into(), json!(4));
+    let text = md(&f);
+    assert!(
+        text.contains("| `faults` |  | whole run | 0 | 0 | 4 |"),
+        "{text}"
+    );
+}
+
+#[test]
+fn each_experiment_has_its_opening() {
+    let b = folder(
+        "admittance",
+        vec![
+            variant(
+                "learned",
+                json!({"external_torque_nrmse": 0.46, "train_seconds": 8.4, "observer_nodes": 1000, "reference_bound_violations": 0}),
+            ),
+            variant(
+                "momentum",
+                json!({"external_torque_nrmse": 0.81, "reference_bound_violations": 2}),
+            ),
+        ],
+        "[admittance.saturation]\nhalf_range = [1.1, inf]\n",
+    );
+    let top = opening(&b);
+    assert!(
+        top.starts_with("# Experiment B: force-sensorless admittance"),
+        "{top}"
+    );
+    assert!(top.contains("`learned` 0.4600; `momentum` 0.8100"), "{top}");
+    assert!(
+        top.contains("5.088 s (1000 nodes)") && top.contains("8.400 s"),
+        "{top}"
+    );
+    assert!(
+        top.contains("samples × joints outside: `momentum` 2 | no |"),
+        "{top}"
+    );
+    assert!(
+        top.contains("q_r left its saturation bound on 2 samples"),
+        "{top}"
+    );
+    let mut mujoco = b.clone();
+    mujoco.scenario = "baxter_mujoco".into();
+    mujoco.plant = Some("mujoco".into());
+    assert!(opening(&mujoco).starts_with("# Experiment B on the MuJoCo plant"));
+
+    let c = folder(
+        "dynamic_nodes",
+        vec![variant(
+            "dynamic",
+            json!({"nodes_discarded": 185, "nodes_added": 100, "approx_rmse_full": 2.5633, "approx_rmse_after_discard": 2.5720, "approx_rmse_after_growth": 1.5126}),
+        )],
+        "",
+    );
+    let top = opening(&c);
+    assert!(
+        top.contains("| nodes discarded | 208 of 512 | 185 of 512 |"),
+        "{top}"
+    );
+    assert!(top.contains("(+0.3 %) | yes (within 10 %) |"), "{top}");
+    assert!(top.contains("(-41.2 %) | yes |"), "{top}");
+
+    let data = folder("free_motion", vec![variant("base", json!({}))], "");
+    let top = opening(&data);
+    assert!(
+        top.contains("| duration | 450 s | 9 s, 10 samples |"),
+        "{top}"
+    );
+
+    let other = folder("mine", vec![variant("a", clean(json!({})))], "");
+    let top = opening(&other);
+    assert!(
+        top.contains("is not one of the paper's experiments"),
+        "{top}"
+    );
+    assert!(top.contains("`a` 0.001500 rad (s0)"), "{top}");
+}
+
+#[test]
+fn the_html_is_well_formed_and_self_contained() {
+    let f = folder(
+        "deadzone",
+        vec![variant("nn_compensated", clean(json!({})))],
+        "",
+    );
+    let text = html(&f, &[], None);
+    assert!(text.starts_with("<!DOCTYPE html>"));
+    assert!(!text.contains("http://") && !text.contains("https://"));
+    assert_eq!(
+        text.matches("<table>").count(),
+        text.matches("</table>").count()
+    );
+}

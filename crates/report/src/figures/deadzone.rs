@@ -1,0 +1,258 @@
+//! Experiment A, deadzone compensation (scenario `deadzone`): Figs 7-12, and Figs 11b, 12b
+//! for the wide-deadzone pair when the run has it.
+
+use admittance_dynamics::{forward_kinematics, Data, Model};
+use admittance_runfolder::columns;
+
+use super::common::{
+    compared, extra, figure, joint0, joint_col, last_window, line, panel, planned, short, time,
+    tracking, variant,
+};
+use super::model::{Figure, Line, Marker, Panel, Planned};
+use super::Arm;
+use crate::folder::{RunFolder, Variant};
+use crate::number::setting;
+
+const WITH: &str = "nn_compensated";
+const WITHOUT: &str = "nn_uncompensated";
+const WITH_WIDE: &str = "nn_compensated_wide";
+const WITHOUT_WIDE: &str = "nn_uncompensated_wide";
+
+fn error_line(v: &Variant, j: &str, color: usize, thin: bool) -> Result<Line, String> {
+    let r = joint_col(v, columns::REFERENCE, j)?;
+    let q = joint_col(v, columns::POSITION, j)?;
+    let e: Vec<f64> = r.iter().zip(q).map(|(a, b)| a - b).collect();
+    Ok(line(
+        format!("q_r - q, {}", v.name),
+        time(v)?,
+        &e,
+        color,
+        thin,
+    ))
+}
+
+fn deadzone_band(folder: &RunFolder, variant: &str, joint: &str) -> Vec<Marker> {
+    match folder.deadzone(variant, joint) {
+        Some((l, r)) => vec![
+            Marker {
+                at: l,
+                label: format!(
+                    "deadzone [d_l, d_r] = [{}, {}] N m (scenario.toml)",
+                    setting(l),
+                    setting(r)
+                ),
+            },
+            Marker {
+                at: r,
+                label: String::new(),
+            },
+        ],
+        None => Vec::new(),
+    }
+}
+
+fn control_inputs(folder: &RunFolder, v: &Variant, j: &str) -> Result<Panel, String> {
+    let t = time(v)?;
+    let mut p = panel(
+        format!("joint {}, variant {}, last 6 s", short(j), v.name),
+        "torque (N m)",
+        vec![
+            line(
+                "commanded tau (controller output)",
+                t,
+                joint_col(v, columns::COMMAND, j)?,
+                0,
+                false,
+            ),
+            line(
+                "applied D(tau) (after the deadzone)",
+                t,
+                joint_col(v, columns::APPLIED, j)?,
+                1,
+                true,
+            ),
+        ],
+    );
+    p.hlines = deadzone_band(folder, &v.name, j);
+    p.x_range = last_window(t, 6.0);
+    Ok(p)
+}
+
+fn ee_positions(
+    model: &Model,
+    v: &Variant,
+    joints: &[String],
+    prefix: &str,
+) -> Result<[Vec<f64>; 3], String> {
+    let cols: Vec<&[f64]> = joints
+        .iter()
+        .map(|j| joint_col(v, prefix, j))
+        .collect::<Result<_, _>>()?;
+    let mut data = Data::new(model);
+    let mut q = vec![0.0; joints.len()];
+    let mut out = [Vec::new(), Vec::new(), Vec::new()];
+    for k in 0..v.table.rows() {
+        for (qi, c) in q.iter_mut().zip(&cols) {
+            *qi = c[k];
+        }
+        // A row the kinematics refuses (non-finite angles) is a gap in the figure.
+        let p = match forward_kinematics(model, &mut data, &q) {
+            Ok(()) => {
+                let p = data.frame_placements[model.tip_frame].translation;
+                [p[0], p[1], p[2]]
+            }
+            Err(_) => [f64::NAN; 3],
+        };
+        for a in 0..3 {
+            out[a].push(p[a]);
+        }
+    }
+    Ok(out)
+}
+
+fn fig7(folder: &RunFolder, arm: Arm<'_>) -> Result<Figure, String> {
+    let v = variant(folder, WITH)?;
+    let model = arm?;
+    let names: Vec<&str> = model.joint_names().collect();
+    if names.len() != folder.joints.len() || names.iter().zip(&folder.joints).any(|(a, b)| *a != b)
+    {
+        return Err(format!(
+            "the URDF's joints [{}] are not the run's [{}]",
+            names.join(", "),
+            folder.joints.join(", ")
+        ));
+    }
+    let t = time(v)?;
+    let desired = ee_positions(model, v, &folder.joints, columns::DESIRED)?;
+    let actual = ee_positions(model, v, &folder.joints, columns::POSITION)?;
+    let panels = columns::AXES
+        .iter()
+        .enumerate()
+        .map(|(a, axis)| {
+            panel(
+                format!("hand {axis} (base frame), variant {}", v.name),
+                &format!("{axis} (m)"),
+                vec![
+                    line("desired: FK(q_d)", t, &desired[a], 0, false),
+                    line("actual: FK(q)", t, &actual[a], 1, true),
+                ],
+            )
+        })
+        .collect();
+    Ok(figure(
+        "Fig. 7: tracking performance of the end-effector",
+        panels,
+    ))
+}
+
+/// Fig 8: the y axis is sized to the evaluation window, so that the start-up transient
+/// does not flatten the steady error.
+fn fig8(folder: &RunFolder) -> Result<Figure, String> {
+    let with = variant(folder, WITH)?;
+    let mut lines = vec![line(
+        format!("|p_r - p|, {}", with.name),
+        time(with)?,
+        super::common::col(with, columns::HAND_ERROR)?,
+        1,
+        false,
+    )];
+    if let Ok(without) = variant(folder, WITHOUT) {
+        lines.push(line(
+            format!("|p_r - p|, {}", without.name),
+            time(without)?,
+            super::common::col(without, columns::HAND_ERROR)?,
+            0,
+            true,
+        ));
+    }
+    let from = folder.evaluation_start();
+    let mut p = panel(
+        format!("hand position error (FK of q_r against FK of q); y axis fitted to t ≥ {from} s (evaluation window)"),
+        "error (m)",
+        lines,
+    );
+    p.y_fit_from = Some(from);
+    Ok(figure(
+        "Fig. 8: tracking error of the end-effector",
+        vec![p],
+    ))
+}
+
+fn errors(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result<Figure, String> {
+    let (j, s) = joint0(folder)?;
+    let (va, vb) = (variant(folder, with)?, variant(folder, without)?);
+    let from = folder.evaluation_start();
+    let mut p = panel(
+        format!("joint {s}; y axis fitted to t ≥ {from} s (evaluation window)"),
+        "tracking error (rad)",
+        vec![error_line(vb, j, 0, false)?, error_line(va, j, 1, true)?],
+    );
+    // Like Fig 8: the start-up transient would flatten the steady error.
+    p.y_fit_from = Some(from);
+    Ok(figure(
+        format!("Fig. {number}: tracking errors of joint {s} with/without NN compensation"),
+        vec![p],
+    ))
+}
+
+fn inputs(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result<Figure, String> {
+    let (j, s) = joint0(folder)?;
+    let (va, vb) = (variant(folder, with)?, variant(folder, without)?);
+    Ok(compared(
+        format!("Fig. {number}: control inputs of joint {s}"),
+        vec![
+            control_inputs(folder, va, j)?,
+            control_inputs(folder, vb, j)?,
+        ],
+    ))
+}
+
+fn joint_tracking(folder: &RunFolder, name: &str, title: &str) -> Result<Figure, String> {
+    let (j, s) = joint0(folder)?;
+    Ok(figure(
+        format!("{title} {s}"),
+        vec![tracking(variant(folder, name)?, j, columns::DESIRED)?],
+    ))
+}
+
+/// Figs 7-12 (and 11b, 12b).
+pub fn plan(folder: &RunFolder, arm: Arm<'_>) -> Vec<Planned> {
+    let mut out = vec![
+        planned(7, "end_effector", fig7(folder, arm)),
+        planned(8, "end_effector_error", fig8(folder)),
+        planned(
+            9,
+            "s0_with_compensation",
+            joint_tracking(folder, WITH, "Fig. 9: tracking with NN compensation, joint"),
+        ),
+        planned(
+            10,
+            "s0_without_compensation",
+            joint_tracking(
+                folder,
+                WITHOUT,
+                "Fig. 10: tracking without NN compensation, joint",
+            ),
+        ),
+        planned(11, "s0_errors", errors(folder, WITH, WITHOUT, "11")),
+        planned(12, "s0_control_inputs", inputs(folder, WITH, WITHOUT, "12")),
+    ];
+    if folder.variant(WITH_WIDE).is_some() && folder.variant(WITHOUT_WIDE).is_some() {
+        let data = format!("the same columns of {WITH_WIDE}, {WITHOUT_WIDE}");
+        out.push(extra(
+            "11b",
+            "fig11b_s0_errors_wide",
+            "Fig. 11 for the wide deadzone pair (not in the paper).",
+            &data,
+            errors(folder, WITH_WIDE, WITHOUT_WIDE, "11b"),
+        ));
+        out.push(extra(
+            "12b",
+            "fig12b_s0_control_inputs_wide",
+            "Fig. 12 for the wide deadzone pair (not in the paper).",
+            &data,
+            inputs(folder, WITH_WIDE, WITHOUT_WIDE, "12b"),
+        ));
+    }
+    out
+}

@@ -1,0 +1,24 @@
+//! The contract of a run folder, the one place that defines it: what `admittance run`
+//! writes (the `scenario` crate) and what `admittance report` reads (the `report` crate).
+//!
+//! * [`files`]: the file names of a run folder;
+//! * [`columns`]: the time-series columns of `VARIANT.csv` and the other CSV files;
+//! * [`metrics`]: every metric of `summary.json` with its unit, whether it is per joint
+//!   and the window it is computed over;
+//! * [`summary`]: the format marker and version of `summary.json`, and [`summary::is_run_folder`],
+//!   which tells a folder this tool wrote from anything else (a user's folder is never
+//!   replaced by `run --out`);
+//! * [`write_atomic`]: files are written through a temporary sibling and a rename.
+//!
+//! docs/outputs.md describes the same contract for users.
+
+#![warn(missing_docs)]
+
+pub mod columns;
+pub mod files;
+pub mod metrics;
+pub mod summary;
+
+mod atomic;
+
+pub use atomic::{temp_sibling, write_atomic};

@@ -1,0 +1,74 @@
+//! Scenarios of `admittance`: the TOML files in `scenarios/` (one per experiment, with
+//! named variants), the [`ClosedLoop`] that wires one control period, the runner that
+//! steps it against the simulated plant and gathers the metrics, the training of the
+//! learned observers (with a cache), and the run folder it writes.
+//!
+//! * [`ScenarioSource`]: a scenario file parsed once, every key with its position; a
+//!   variant resolves to a typed [`Scenario`], and every error ([`ScenarioError`]) names the
+//!   file, the line and the key.
+//! * [`ClosedLoop`]: observer -> admittance model -> controller, one period, allocation-free.
+//! * [`run_variant`], [`run_scenario`]: run a variant / every variant into a run folder
+//!   (`admittance_runfolder` defines its files, columns and metrics).
+//! * [`FreeMotionData`]: the free-motion data format and its validating loader.
+//!
+//! ```no_run
+//! use admittance_scenario::{run_variant, RunOptions, ScenarioSource};
+//! let path = std::path::Path::new("scenarios/deadzone.toml");
+//! let mut source = ScenarioSource::load(path).unwrap();
+//! source.set("duration=2").unwrap();
+//! let run = run_variant(&source, path, Some("nn_compensated"), &RunOptions::default()).unwrap();
+//! println!("{:?}", run.metrics.tracking_rmse);
+//! ```
+
+#![warn(missing_docs)]
+// Scenario errors carry the file, line, key and hint by value; they are the cold path,
+// returned once per bad file, so their size is not worth a box on every signature.
+#![allow(clippy::result_large_err)]
+// Bounds are written `!(x <= bound)` on purpose: a NaN fails them.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod assemble;
+mod budget;
+mod closed_loop;
+mod context;
+mod error;
+mod free_motion;
+mod gather;
+mod hand;
+mod health;
+mod limits;
+mod metrics;
+mod node_events;
+mod progress;
+mod recorder;
+mod run_folder;
+mod runner;
+mod series;
+mod source;
+mod spec;
+mod training;
+mod trajectory;
+
+pub use closed_loop::{
+    ClosedLoop, Compliance, EstimateSource, EstimateToController, LoopController, LoopInput,
+    LoopParts, LoopStatus, ObserverStage,
+};
+pub use error::{Invalid, ScenarioError};
+pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
+pub use health::Divergence;
+pub use limits::Limits;
+pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
+pub use progress::{Progress, ProgressFn, RunOptions, Stage};
+pub use run_folder::{
+    check_out_dir, remove_stale_partials, run_scenario, write_series_csv, RunError, RunSummary,
+};
+pub use runner::{run_variant, VariantRun};
+pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};
+pub use source::ScenarioSource;
+pub use spec::{
+    mid_range, AdmittanceSpec, ArmSpec, ControllerKind, ControllerSpec, DynamicNodesSpec,
+    ObserverKind, ObserverSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec,
+    TrajectorySpec,
+};
+pub use training::{TrainedNetwork, VALIDATION_DECIMATION};
+pub use trajectory::Trajectory;

@@ -1,0 +1,367 @@
+//! The run folder (docs/outputs.md; names from `admittance_runfolder`): `summary.json`, one
+//! CSV per variant, the scenario as run. Written into a hidden sibling folder and renamed
+//! into place at the end, so that a failed or interrupted run never leaves a folder that
+//! looks complete. `--out` may replace only a folder this tool wrote (or an empty one);
+//! anything else is refused before the run starts, unless forced.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use admittance_runfolder::files;
+use admittance_runfolder::summary::{self, OutTarget};
+use serde_json::{json, Value};
+
+use crate::error::ScenarioError;
+use crate::progress::RunOptions;
+use crate::runner::{run_variant, VariantRun};
+use crate::series::TimeSeries;
+use crate::source::ScenarioSource;
+use crate::spec::Scenario;
+
+/// The file inside a partial folder that marks it as this tool's work in progress.
+const PARTIAL_MARKER: &str = ".admittance-partial";
+
+/// What a finished run produced.
+#[derive(Debug)]
+pub struct RunSummary {
+    /// Scenario name.
+    pub scenario: String,
+    /// The summary as written to `summary.json`.
+    pub json: Value,
+    /// The runs, in variant order.
+    pub variants: Vec<VariantRun>,
+    /// The folder written.
+    pub out_dir: PathBuf,
+    /// Variants that failed although the folder was written: diverged, or a metric that
+    /// is not finite. A run with failures must not be reported as a success.
+    pub failures: Vec<String>,
+}
+
+/// A failure of a whole run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The scenario is invalid (boxed, so that `RunError` stays small).
+    #[error("{0}")]
+    Scenario(Box<ScenarioError>),
+    /// The output folder may not be written (it holds something this tool did not write).
+    #[error("{0}")]
+    Refused(String),
+    /// A finishing step (report, figures, recording) failed.
+    #[error("{0}")]
+    Finish(String),
+    /// Writing the output failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: String,
+        /// The error.
+        source: std::io::Error,
+    },
+}
+
+impl From<ScenarioError> for RunError {
+    fn from(e: ScenarioError) -> Self {
+        RunError::Scenario(Box::new(e))
+    }
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
+    move |source| RunError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// Writes any time series as CSV (header row, then one row per sample; shortest
+/// round-trip decimal form of every value).
+pub fn write_series_csv(path: &Path, series: &TimeSeries) -> Result<(), RunError> {
+    let file = std::fs::File::create(path).map_err(io_err(path))?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "{}", series.columns.join(",")).map_err(io_err(path))?;
+    let mut line = String::new();
+    for row in &series.rows {
+        line.clear();
+        for (k, v) in row.iter().enumerate() {
+            if k > 0 {
+                line.push(',');
+            }
+            use std::fmt::Write as _;
+            let _ = write!(line, "{v}");
+        }
+        writeln!(w, "{line}").map_err(io_err(path))?;
+    }
+    w.flush().map_err(io_err(path))
+}
+
+/// Where a run may write `out_dir`: refused (before any work) when it holds anything this
+/// tool did not write, unless `force`; never the current folder, one of its parents, or a
+/// folder holding the scenario file.
+pub fn check_out_dir(out_dir: &Path, scenario: &Path, force: bool) -> Result<(), RunError> {
+    let refuse = |why: String| {
+        RunError::Refused(format!(
+            "--out {}: {why}; nothing was written",
+            out_dir.display()
+        ))
+    };
+    if out_dir.file_name().is_none() || out_dir.as_os_str().is_empty() {
+        return Err(refuse("is not a folder name a run can replace (`.`, `..` or `/`); give a new folder, e.g. --out runs/NAME".into()));
+    }
+    let canonical = |p: &Path| std::fs::canonicalize(p).ok();
+    if let Some(out) = canonical(out_dir) {
+        let inside = |p: Option<PathBuf>| p.is_some_and(|p| p.starts_with(&out));
+        if inside(std::env::current_dir().ok().and_then(|d| canonical(&d))) {
+            return Err(refuse(
+                "holds the current folder; give a new folder, e.g. --out runs/NAME".into(),
+            ));
+        }
+        if inside(canonical(scenario)) {
+            return Err(refuse(
+                "holds the scenario file being run; give a new folder, e.g. --out runs/NAME".into(),
+            ));
+        }
+    }
+    match summary::classify_out(out_dir) {
+        OutTarget::Absent | OutTarget::EmptyFolder | OutTarget::RunFolder => Ok(()),
+        OutTarget::Other(_) if force && out_dir.is_dir() => Ok(()),
+        OutTarget::Other(why) => Err(refuse(format!(
+            "{why}; a run replaces only a folder it wrote (or an empty one): choose another folder{}",
+            if out_dir.is_dir() { ", or pass --force to replace this one" } else { "" }
+        ))),
+    }
+}
+
+/// Removes partial folders (`.NAME.partial-PID`) left in `parent` by runs that were
+/// killed: only those holding this tool's marker whose process no longer exists.
+/// Returns the folders removed.
+pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return removed;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Some(pid) = name
+            .strip_prefix('.')
+            .and_then(|n| n.rsplit_once(".partial-"))
+            .and_then(|(_, pid)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let path = e.path();
+        let ours = path.join(PARTIAL_MARKER).is_file();
+        if ours
+            && pid != std::process::id()
+            && !process_alive(pid)
+            && std::fs::remove_dir_all(&path).is_ok()
+        {
+            removed.push(path);
+        }
+    }
+    removed
+}
+
+/// Whether a process exists (Linux: `/proc/PID`; elsewhere assumed alive, so nothing is
+/// removed that might still be written).
+fn process_alive(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return true;
+    }
+    proc.join(pid.to_string()).exists()
+}
+
+/// Runs every variant of the scenario at `path` (or only `only`) with the `--set`
+/// `overrides` and writes the folder `out_dir`. `progress` is told when each variant starts
+/// (name, index, count); `finish` runs on the complete but not yet renamed folder (its
+/// path is the argument; `summary.json` and every CSV are there) to add more outputs
+/// (figures, report, recording): an error there removes the folder like any other.
+#[allow(clippy::too_many_arguments)]
+pub fn run_scenario(
+    path: &Path,
+    out_dir: &Path,
+    only: Option<&str>,
+    overrides: &[String],
+    options: &RunOptions,
+    force: bool,
+    mut progress: impl FnMut(&str, usize, usize),
+    finish: impl FnOnce(&Path) -> Result<(), RunError>,
+) -> Result<RunSummary, RunError> {
+    check_out_dir(out_dir, path, force)?;
+    let mut source = ScenarioSource::load(path)?;
+    for o in overrides {
+        source.set(o)?;
+    }
+    let names = source.variant_names();
+    let selected: Vec<Option<String>> = match only {
+        Some(v) => vec![Some(v.to_string())],
+        None if names.is_empty() => vec![None],
+        None => names.iter().cloned().map(Some).collect(),
+    };
+    // Resolve and validate every selected variant before the first long run.
+    let mut scenario_name = String::new();
+    for v in &selected {
+        let s: Scenario = source.resolve(v.as_deref())?;
+        scenario_name = s.name.clone();
+    }
+    let mut runs = Vec::new();
+    for (k, v) in selected.iter().enumerate() {
+        progress(v.as_deref().unwrap_or("base"), k, selected.len());
+        runs.push(run_variant(&source, path, v.as_deref(), options)?);
+    }
+    let evaluation_start = source
+        .resolve::<Scenario>(selected[0].as_deref())?
+        .evaluation_start;
+    crate::hand::across_variants(&mut runs, evaluation_start);
+    let summary = summary_json(&scenario_name, &runs);
+    write_folder(out_dir, path, force, |partial| {
+        for run in &runs {
+            write_series_csv(&partial.join(files::series(&run.name)), &run.series)?;
+            if let Some(fm) = &run.free_motion {
+                write_series_csv(&partial.join(files::free_motion(&run.name, runs.len())), fm)?;
+            }
+            if let Some(w) = &run.node_weights {
+                write_series_csv(&partial.join(files::node_weights(&run.name)), w)?;
+            }
+            if let Some(v) = &run.observer_validation {
+                write_series_csv(&partial.join(files::observer_validation(&run.name)), v)?;
+            }
+        }
+        let scenario_copy = partial.join(files::SCENARIO);
+        std::fs::write(&scenario_copy, source.text_as_run(options.seed))
+            .map_err(io_err(&scenario_copy))?;
+        // summary.json last: its presence marks a complete folder.
+        let summary_path = partial.join(files::SUMMARY);
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
+        finish(partial)
+    })?;
+    let failures = runs.iter().flat_map(failures).collect();
+    Ok(RunSummary {
+        scenario: scenario_name,
+        json: summary,
+        variants: runs,
+        out_dir: out_dir.to_path_buf(),
+        failures,
+    })
+}
+
+/// What went wrong in a variant: a divergence, or a metric that is not finite (the JSON
+/// `null` of a NaN; `external_torque_nrmse` is `null` by design without contact).
+fn failures(run: &VariantRun) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(d) = &run.divergence {
+        out.push(format!(
+            "variant `{}` diverged at t = {} s: {}",
+            run.name, d.time, d.reason
+        ));
+        return out;
+    }
+    fn finite(v: &Value) -> bool {
+        match v {
+            Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
+            Value::Array(a) => a.iter().all(finite),
+            Value::Object(o) => o.values().all(finite),
+            Value::Null => false,
+            _ => true,
+        }
+    }
+    for (k, v) in run.metrics.to_map() {
+        let may_be_null = matches!(
+            k.as_str(),
+            "external_torque_nrmse"
+                | "diverged_at"
+                | "wrench_estimate_rmse"
+                | "wrench_estimate_nrmse"
+                | "hand_compliance_error_rms"
+                | "hand_drift_after_release"
+        );
+        if !(finite(&v) || may_be_null && v.is_null()) {
+            out.push(format!(
+                "variant `{}`: metric `{k}` is not finite",
+                run.name
+            ));
+        }
+    }
+    out
+}
+
+/// `summary.json` of a run.
+fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
+    let variants: serde_json::Map<String, Value> = runs
+        .iter()
+        .map(|run| {
+            (
+                run.name.clone(),
+                Value::Object(run.metrics.to_map().into_iter().collect()),
+            )
+        })
+        .collect();
+    let mut out = serde_json::Map::new();
+    out.insert(summary::KEY_FORMAT.into(), json!(summary::FORMAT));
+    out.insert(
+        summary::KEY_FORMAT_VERSION.into(),
+        json!(summary::FORMAT_VERSION),
+    );
+    out.insert(summary::KEY_SCENARIO.into(), json!(scenario));
+    out.insert(
+        summary::KEY_JOINTS.into(),
+        json!(runs.first().map(|r| r.joints.clone()).unwrap_or_default()),
+    );
+    out.insert(summary::KEY_VARIANTS.into(), Value::Object(variants));
+    out.insert(
+        summary::KEY_VARIANT_ORDER.into(),
+        json!(runs.iter().map(|r| r.name.clone()).collect::<Vec<_>>()),
+    );
+    Value::Object(out)
+}
+
+/// Writes a folder through a hidden partial sibling (`fill` writes into it) and renames it
+/// to `out_dir` (replacing what [`check_out_dir`] allowed).
+fn write_folder(
+    out_dir: &Path,
+    scenario: &Path,
+    force: bool,
+    fill: impl FnOnce(&Path) -> Result<(), RunError>,
+) -> Result<(), RunError> {
+    // Checked again: the run may have taken hours.
+    check_out_dir(out_dir, scenario, force)?;
+    let parent = out_dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(io_err(parent))?;
+    remove_stale_partials(parent);
+    let leaf = out_dir
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "run".into());
+    let partial = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
+    if partial.join(PARTIAL_MARKER).is_file() {
+        let _ = std::fs::remove_dir_all(&partial);
+    }
+    std::fs::create_dir(&partial).map_err(io_err(&partial))?;
+    let marker = partial.join(PARTIAL_MARKER);
+    let result = std::fs::write(&marker, "admittance run in progress\n")
+        .map_err(io_err(&marker))
+        .and_then(|_| fill(&partial));
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&partial);
+        return Err(e);
+    }
+    let _ = std::fs::remove_file(&marker);
+    let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
+    let replaced = std::fs::symlink_metadata(out_dir).is_ok();
+    if replaced {
+        std::fs::rename(out_dir, &old).map_err(io_err(out_dir))?;
+    }
+    if let Err(e) = std::fs::rename(&partial, out_dir) {
+        if replaced {
+            let _ = std::fs::rename(&old, out_dir);
+        }
+        return Err(io_err(out_dir)(e));
+    }
+    if replaced {
+        let _ = std::fs::remove_dir_all(&old);
+    }
+    Ok(())
+}

@@ -1,0 +1,417 @@
+//! The typed scenario: what a TOML file in `scenarios/` describes.
+//!
+//! ```toml
+//! name = "deadzone"
+//! description = "one line for `admittance list`"
+//! duration = 30.0            # s
+//! evaluation_start = 10.0    # s: metrics use [evaluation_start, duration]
+//!
+//! [arm]
+//! urdf = "../models/baxter_left_arm.urdf"   # relative to the scenario file
+//! base = "base"
+//! tip = "left_hand"
+//!
+//! [trajectory]               # q_d(t) = offset + sum of sines
+//! offset = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5]
+//! [[trajectory.sines]]
+//! joint = "left_s0"
+//! amplitude = 1.0
+//! period = 4.49              # s
+//!
+//! [plant]                    # admittance_sim::PlantConfig: friction, deadzones, spring, sensors, ...
+//! [controller]               # kind = "neural" | "pd" | "computed_torque", with [controller.neural] etc.
+//! [admittance]               # optional: admittance model and reference saturation
+//! [task_admittance]          # optional, instead: the hand's admittance (linear, angular, axes, IK)
+//! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz
+//! [observer.training]        # learned / hybrid: free-motion data, validation data, nodes, friction inputs, cache
+//! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
+//! [dynamic_nodes]            # optional: discard / grow events (experiment C)
+//! [variants.NAME]            # overrides of any of the above, per variant
+//! ```
+
+mod arm_fit;
+pub use arm_fit::mid_range;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+use admittance_control::{
+    AdmittanceConfig, ComputedTorqueConfig, GrowthParams, MomentumObserverConfig,
+    NeuralControllerConfig, PdConfig, TaskSpaceAdmittanceConfig,
+};
+use serde::{Deserialize, Serialize};
+
+use admittance_sim::PlantConfig;
+
+/// The chain to load.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmSpec {
+    /// URDF file, relative to the scenario file (or absolute).
+    pub urdf: PathBuf,
+    /// Base link (default: the root link).
+    #[serde(default)]
+    pub base: Option<String>,
+    /// Tip link (default: the single leaf).
+    #[serde(default)]
+    pub tip: Option<String>,
+}
+
+/// One sinusoidal component `amplitude * sin(2 pi t / period + phase)` on a joint.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SineSpec {
+    /// Joint name.
+    pub joint: String,
+    /// Amplitude (rad or m).
+    pub amplitude: f64,
+    /// Period (s).
+    pub period: f64,
+    /// Phase (rad).
+    #[serde(default)]
+    pub phase: f64,
+}
+
+/// The desired joint trajectory `q_d(t)`: a pose (`offset`, or `waypoints` to move between
+/// poses) plus sines.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// Constant part, one value per joint. Default: the middle of each joint's limits (0
+    /// for a joint without limits), a pose that fits whatever arm the scenario names.
+    #[serde(default)]
+    pub offset: Option<Vec<f64>>,
+    /// Poses to move between, instead of `offset`: `[[t, q_1, ..., q_n], ...]`, times
+    /// strictly increasing. Before the first the pose is held, between two the joints move
+    /// with a quintic blend (zero velocity and acceleration at each waypoint), after the
+    /// last it is held.
+    #[serde(default)]
+    pub waypoints: Vec<Vec<f64>>,
+    /// Sinusoidal components.
+    #[serde(default)]
+    pub sines: Vec<SineSpec>,
+}
+
+/// Which controller runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerKind {
+    /// The paper's adaptive neural controller (METHOD.md section 3).
+    Neural,
+    /// Joint PD (optionally with nominal gravity compensation).
+    Pd,
+    /// Computed torque with the nominal model.
+    ComputedTorque,
+}
+
+/// The controller section: a kind and the settings of each kind (only the chosen one is
+/// used, so variants can switch kinds).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// The controller that runs.
+    pub kind: ControllerKind,
+    /// Settings of the neural controller.
+    #[serde(default)]
+    pub neural: NeuralControllerConfig,
+    /// Settings of the PD controllers.
+    #[serde(default)]
+    pub pd: Option<PdConfig>,
+    /// Settings of computed torque.
+    #[serde(default)]
+    pub computed_torque: Option<ComputedTorqueConfig>,
+    /// Whether the control law subtracts the external-torque estimate (METHOD.md section 3,
+    /// the paper's eq. 26: `tau = ... - tau_ext_hat`). Default true. With false and an
+    /// admittance model, the estimate acts only through the compliant reference
+    /// (docs/experiments.md shows both on experiment B).
+    #[serde(default = "yes")]
+    pub subtract_estimate: bool,
+}
+
+/// Where the external-torque estimate that drives the admittance model comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ObserverKind {
+    /// No estimate (zeros).
+    #[default]
+    None,
+    /// The true external torque of the plant (an upper bound for any observer).
+    Oracle,
+    /// The generalised-momentum observer with a nominal model (METHOD.md section 5,
+    /// baseline): settings in `[observer.momentum]`, model error in `nominal_inertia_scale`.
+    Momentum,
+    /// The paper's learned observer (eq. 19): a flat RBF network trained on free-motion
+    /// data (`[observer.training]`) predicts the free-motion torque.
+    Learned,
+    /// The momentum observer with a flat RBF network trained on what its nominal model
+    /// misses in free motion (`admittance_control::HybridObserver`).
+    Hybrid,
+}
+
+impl ObserverKind {
+    /// Whether the observer needs a trained network.
+    pub fn is_learned(self) -> bool {
+        matches!(self, ObserverKind::Learned | ObserverKind::Hybrid)
+    }
+}
+
+/// Where the training of a learned observer comes from (`[observer.training]`).
+///
+/// The training data are free-motion samples (docs/outputs.md, "Free-motion data"): `data`
+/// names either a scenario file (`.toml`) that records them, simulated at the start of the
+/// run (e.g. `free_motion.toml`), or a CSV file a user recorded on a real arm. The
+/// validation data, a different excitation, come the same way (`validation`): the ridge
+/// parameter lambda is chosen on them and `validation_nrmse` is measured on them. Paths are
+/// relative to the scenario file. A trained network is cached in `cache_dir` under a key
+/// of the data's identity (file contents; for a data scenario also its URDF and the program
+/// version) and every training setting; a matching entry is loaded instead of training.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingSpec {
+    /// Training data: a data scenario (`.toml`, with `[record] free_motion_csv = true`) or
+    /// a free-motion CSV file.
+    pub data: PathBuf,
+    /// Validation data (a different excitation): a data scenario or a CSV file.
+    pub validation: PathBuf,
+    /// Enhancement (Gaussian) nodes; the paper uses 1000.
+    #[serde(default = "default_nodes")]
+    pub nodes: usize,
+    /// Friction-shaped inputs `tanh(qdot / v)` beside the Gaussian nodes (METHOD.md
+    /// section 7).
+    #[serde(default)]
+    pub friction_features: bool,
+    /// The scales `v` (rad/s) of the friction-shaped inputs.
+    #[serde(default = "default_friction_scales")]
+    pub friction_scales: Vec<f64>,
+    /// Seed of the centre placement.
+    #[serde(default = "default_training_seed")]
+    pub seed: u64,
+    /// Node widths: `eta_j = width_scale * (mean distance from centre j to its
+    /// `width_neighbours` nearest centres)`, in standardised units (the broad module's kNN
+    /// rule). Defaults 2 and 8.
+    #[serde(default = "default_width_scale")]
+    pub width_scale: f64,
+    /// See `width_scale`.
+    #[serde(default = "default_width_neighbours")]
+    pub width_neighbours: usize,
+    /// Folder of cached networks, relative to the scenario file; the environment variable
+    /// `ADMITTANCE_CACHE_DIR` overrides it. Default `../.admittance-cache`.
+    #[serde(default = "default_cache_dir")]
+    pub cache_dir: PathBuf,
+    /// Whether to use and fill the cache.
+    #[serde(default = "default_true")]
+    pub cache: bool,
+}
+
+fn default_nodes() -> usize {
+    1000
+}
+fn default_friction_scales() -> Vec<f64> {
+    vec![0.01, 0.05, 0.2]
+}
+fn default_training_seed() -> u64 {
+    admittance_learning::broad::BroadConfig::default().seed
+}
+fn default_warmup() -> f64 {
+    0.5
+}
+fn default_width_scale() -> f64 {
+    2.0
+}
+fn default_width_neighbours() -> usize {
+    8
+}
+fn default_cache_dir() -> PathBuf {
+    PathBuf::from("../.admittance-cache")
+}
+fn default_true() -> bool {
+    true
+}
+
+/// The observer section (`[observer]`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserverSpec {
+    /// The estimate's source.
+    #[serde(default)]
+    pub kind: ObserverKind,
+    /// The observer's nominal model is the arm's model with every link mass and inertia
+    /// multiplied by this (0.8: a 20% model error). Default 1. Used by `momentum`.
+    #[serde(default = "unit")]
+    pub nominal_inertia_scale: f64,
+    /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
+    /// but `oracle` (METHOD.md sections 5 and 7); 0 disables it. Default 0.
+    #[serde(default)]
+    pub cutoff_hz: f64,
+    /// Cut-off (Hz) of a second 2nd-order low-pass on the angles and torques every observer
+    /// but `oracle` is fed, with velocities and accelerations differentiated again after it
+    /// (`admittance_sim::InputConditioner`); the learned observers' training data pass the
+    /// same stage. 0 (default) feeds the sensors' signals as they are.
+    #[serde(default)]
+    pub input_filter_hz: f64,
+    /// Warm-up (s): the estimate of every observer but `oracle` is held at zero for this
+    /// long after the start while the observer runs, so that the start-up transients of
+    /// the sensors' and the observer's filters (the torque filters start from zero
+    /// command) do not reach the admittance model. Default 0.5 s.
+    #[serde(default = "default_warmup")]
+    pub warmup: f64,
+    /// Settings of the momentum observer (also the momentum part of `hybrid`).
+    #[serde(default)]
+    pub momentum: MomentumObserverConfig,
+    /// Training of the network (`learned`, `hybrid`).
+    #[serde(default)]
+    pub training: Option<TrainingSpec>,
+}
+
+impl Default for ObserverSpec {
+    fn default() -> Self {
+        Self {
+            kind: ObserverKind::None,
+            nominal_inertia_scale: 1.0,
+            cutoff_hz: 0.0,
+            input_filter_hz: 0.0,
+            warmup: default_warmup(),
+            momentum: MomentumObserverConfig::default(),
+            training: None,
+        }
+    }
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// The admittance section.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdmittanceSpec {
+    /// Whether the reference is shaped by the admittance model (otherwise `q_r = q_d`).
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// The model and its saturation.
+    #[serde(flatten)]
+    pub config: AdmittanceConfig,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Dynamic-node events of experiment C (METHOD.md section 4).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DynamicNodesSpec {
+    /// Time at which nodes whose tracked activation stayed below `upsilon` are discarded (s).
+    pub discard_time: f64,
+    /// Discard threshold Upsilon.
+    pub upsilon: f64,
+    /// Time at which growth near the trajectory starts (s).
+    pub grow_time: f64,
+    /// Nodes to add.
+    pub grow_nodes: usize,
+    /// Control steps between two additions.
+    #[serde(default = "one")]
+    pub grow_interval_steps: usize,
+    /// Growth test parameters (`m`, `Xi`, spacing).
+    pub growth: GrowthParams,
+    /// Length of the window at the end of each phase over which the approximation error
+    /// of f is measured (s).
+    pub approximation_window: f64,
+}
+
+fn one() -> usize {
+    1
+}
+
+/// Extra recordings (`[record]`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordSpec {
+    /// Record what the sensors saw at the control rate, in the free-motion data format
+    /// (METHOD.md section 5; columns in docs/outputs.md), to `free_motion.csv`.
+    #[serde(default)]
+    pub free_motion_csv: bool,
+}
+
+/// What the run writes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write one CSV row every `decimation` control steps.
+    #[serde(default = "ten")]
+    pub decimation: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { decimation: ten() }
+    }
+}
+
+fn ten() -> usize {
+    10
+}
+
+/// A whole scenario (one variant, resolved).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Scenario name (the summary's `scenario`).
+    pub name: String,
+    /// One line for `admittance list`.
+    pub description: String,
+    /// Simulated time (s).
+    pub duration: f64,
+    /// Start of the metrics window (s).
+    #[serde(default)]
+    pub evaluation_start: f64,
+    /// Seed of every random draw of the run (sensor noise, node placement seeds are in
+    /// their own sections); `--seed` overrides it.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// The arm.
+    pub arm: ArmSpec,
+    /// The desired trajectory (default: hold the middle of the joint limits).
+    #[serde(default)]
+    pub trajectory: TrajectorySpec,
+    /// The plant (true arm, friction, deadzone, environment, sensors, rates).
+    #[serde(default)]
+    pub plant: PlantConfig,
+    /// The controller.
+    pub controller: ControllerSpec,
+    /// The joint-space admittance model (absent: `q_r = q_d`).
+    #[serde(default)]
+    pub admittance: Option<AdmittanceSpec>,
+    /// The task-space admittance model at the hand (exclusive with `[admittance]`).
+    #[serde(default)]
+    pub task_admittance: Option<TaskSpaceAdmittanceConfig>,
+    /// The external-torque estimate.
+    #[serde(default)]
+    pub observer: ObserverSpec,
+    /// Dynamic-node events (experiment C).
+    #[serde(default)]
+    pub dynamic_nodes: Option<DynamicNodesSpec>,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Extra recordings.
+    #[serde(default)]
+    pub record: RecordSpec,
+    /// Variant tables (read by [`super::ScenarioSource`], ignored here).
+    #[serde(default, skip_serializing)]
+    pub variants: Option<toml::Table>,
+}
+
+impl Scenario {
+    /// The URDF path resolved against the scenario file's directory.
+    pub fn urdf_path(&self, scenario_file: &Path) -> PathBuf {
+        if self.arm.urdf.is_absolute() {
+            self.arm.urdf.clone()
+        } else {
+            scenario_file
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join(&self.arm.urdf)
+        }
+    }
+}

@@ -1,0 +1,267 @@
+//! Checks of a resolved scenario that serde cannot make: signs, ranges, names, and the
+//! combinations of sections.
+
+use super::{ControllerKind, Scenario};
+use crate::error::Invalid;
+
+impl Scenario {
+    /// Checks what serde cannot: signs, ranges, names. `joints` are the model's joint names.
+    /// Every problem is returned, each at its key.
+    pub fn validate(&self, joints: &[String]) -> Vec<Invalid> {
+        let mut out = Vec::new();
+        self.validate_times(&mut out);
+        self.validate_trajectory(joints, &mut out);
+        self.validate_controller(&mut out);
+        self.validate_dynamic_nodes(&mut out);
+        self.validate_observer(&mut out);
+        if self.task_admittance.is_some() && self.admittance.as_ref().is_some_and(|a| a.enabled) {
+            out.push(
+                Invalid::new("task_admittance", "a scenario has one admittance model: [admittance] (joint space) or [task_admittance] (the hand), not both")
+                    .hint("remove one of the two tables, or set admittance.enabled = false"),
+            );
+        }
+        if self.output.decimation == 0 {
+            out.push(Invalid::new("output.decimation", "must be at least 1"));
+        }
+        out
+    }
+
+    fn validate_times(&self, out: &mut Vec<Invalid>) {
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            out.push(Invalid::new(
+                "duration",
+                format!("is {}, must be > 0 s", self.duration),
+            ));
+        }
+        if !(self.evaluation_start >= 0.0 && self.evaluation_start < self.duration) {
+            out.push(
+                Invalid::new(
+                    "evaluation_start",
+                    format!("is {}, must be in [0, duration)", self.evaluation_start),
+                )
+                .hint("metrics are computed over [evaluation_start, duration]"),
+            );
+        }
+    }
+
+    fn validate_trajectory(&self, joints: &[String], out: &mut Vec<Invalid>) {
+        let n = joints.len();
+        if let Some(offset) = &self.trajectory.offset {
+            if offset.len() != n {
+                out.push(
+                    Invalid::new(
+                        "trajectory.offset",
+                        format!("has {} values, the arm has {n} joints", offset.len()),
+                    )
+                    .hint(format!("one value per joint: {}; or leave `offset` out for the middle of the joint limits", joints.join(", "))),
+                );
+            }
+            if offset.iter().any(|v| !v.is_finite()) {
+                out.push(Invalid::new("trajectory.offset", "must be finite"));
+            }
+            if !self.trajectory.waypoints.is_empty() {
+                out.push(Invalid::new(
+                    "trajectory.waypoints",
+                    "give either `offset` or `waypoints`, not both",
+                ));
+            }
+        }
+        let mut previous = f64::NEG_INFINITY;
+        for (k, w) in self.trajectory.waypoints.iter().enumerate() {
+            let key = format!("trajectory.waypoints.{k}");
+            if w.len() != n + 1 {
+                out.push(
+                    Invalid::new(&key, format!("has {} values; a waypoint is [t, then one angle per joint] ({} values)", w.len(), n + 1))
+                        .hint(format!("joints: {}", joints.join(", "))),
+                );
+                continue;
+            }
+            if w.iter().any(|v| !v.is_finite()) {
+                out.push(Invalid::new(&key, "must be finite"));
+            } else if w[0] <= previous {
+                out.push(Invalid::new(
+                    &key,
+                    format!(
+                        "its time {} s is not after the previous waypoint's ({previous} s)",
+                        w[0]
+                    ),
+                ));
+            }
+            previous = w[0];
+        }
+        for (k, s) in self.trajectory.sines.iter().enumerate() {
+            let key = format!("trajectory.sines.{k}");
+            if !joints.contains(&s.joint) {
+                out.push(
+                    Invalid::new(
+                        format!("{key}.joint"),
+                        format!("unknown joint '{}'", s.joint),
+                    )
+                    .hint(format!("joints of this arm: {}", joints.join(", "))),
+                );
+            }
+            if !(s.period.is_finite() && s.period > 0.0) {
+                out.push(Invalid::new(
+                    format!("{key}.period"),
+                    format!("is {}, must be > 0 s", s.period),
+                ));
+            }
+            if !s.amplitude.is_finite() || !s.phase.is_finite() {
+                out.push(Invalid::new(
+                    key.clone(),
+                    "amplitude and phase must be finite",
+                ));
+            }
+        }
+    }
+
+    fn validate_controller(&self, out: &mut Vec<Invalid>) {
+        match self.controller.kind {
+            ControllerKind::Pd if self.controller.pd.is_none() => out.push(
+                Invalid::new(
+                    "controller.pd",
+                    "kind = \"pd\" needs a [controller.pd] table",
+                )
+                .hint("give kp and kd"),
+            ),
+            ControllerKind::ComputedTorque if self.controller.computed_torque.is_none() => out
+                .push(Invalid::new(
+                    "controller.computed_torque",
+                    "kind = \"computed_torque\" needs a [controller.computed_torque] table",
+                )),
+            _ => {}
+        }
+    }
+
+    fn validate_dynamic_nodes(&self, out: &mut Vec<Invalid>) {
+        if let Some(d) = &self.dynamic_nodes {
+            if self.controller.kind != ControllerKind::Neural {
+                out.push(Invalid::new(
+                    "dynamic_nodes",
+                    "needs controller.kind = \"neural\"",
+                ));
+            }
+            if !(d.discard_time > 0.0
+                && d.discard_time < d.grow_time
+                && d.grow_time < self.duration)
+            {
+                out.push(
+                    Invalid::new(
+                        "dynamic_nodes.grow_time",
+                        "needs 0 < discard_time < grow_time < duration",
+                    )
+                    .hint("discard first, then grow, before the run ends"),
+                );
+            }
+            if !(d.upsilon > 0.0 && d.upsilon < 1.0) {
+                out.push(Invalid::new(
+                    "dynamic_nodes.upsilon",
+                    format!("is {}, must be in (0, 1)", d.upsilon),
+                ));
+            }
+            if !(d.approximation_window > 0.0 && d.approximation_window <= d.discard_time) {
+                out.push(Invalid::new(
+                    "dynamic_nodes.approximation_window",
+                    "must be > 0 and at most discard_time",
+                ));
+            }
+            // Each phase's window must lie inside that phase, or the "after discard" error
+            // would mix in samples from before the discard (and likewise for growth).
+            if d.approximation_window > d.grow_time - d.discard_time
+                || d.approximation_window > self.duration - d.grow_time
+            {
+                out.push(
+                    Invalid::new(
+                        "dynamic_nodes.approximation_window",
+                        format!(
+                            "is {} s, longer than a phase (grow_time - discard_time = {} s, duration - grow_time = {} s)",
+                            d.approximation_window,
+                            d.grow_time - d.discard_time,
+                            self.duration - d.grow_time
+                        ),
+                    )
+                    .hint("each phase's error is measured over the last approximation_window seconds of that phase"),
+                );
+            }
+        }
+    }
+
+    fn validate_observer(&self, out: &mut Vec<Invalid>) {
+        if !(self.observer.nominal_inertia_scale.is_finite()
+            && self.observer.nominal_inertia_scale > 0.0)
+        {
+            out.push(Invalid::new(
+                "observer.nominal_inertia_scale",
+                format!("is {}, must be > 0", self.observer.nominal_inertia_scale),
+            ));
+        }
+        if !(self.observer.cutoff_hz.is_finite() && self.observer.cutoff_hz >= 0.0) {
+            out.push(Invalid::new(
+                "observer.cutoff_hz",
+                format!(
+                    "is {}, must be >= 0 (0: no filter)",
+                    self.observer.cutoff_hz
+                ),
+            ));
+        }
+        if !(self.observer.warmup.is_finite() && self.observer.warmup >= 0.0) {
+            out.push(Invalid::new(
+                "observer.warmup",
+                format!("is {}, must be >= 0 s", self.observer.warmup),
+            ));
+        }
+        let nyquist = 0.5 * self.plant.control_rate_hz;
+        if !(self.observer.input_filter_hz.is_finite()
+            && self.observer.input_filter_hz >= 0.0
+            && self.observer.input_filter_hz < nyquist)
+        {
+            out.push(Invalid::new(
+                "observer.input_filter_hz",
+                format!(
+                    "is {}, must be in [0, {nyquist}) Hz (0: no second filter)",
+                    self.observer.input_filter_hz
+                ),
+            ));
+        }
+        if self.observer.kind.is_learned() {
+            match &self.observer.training {
+                None => out.push(
+                    Invalid::new(
+                        "observer.kind",
+                        "needs an [observer.training] table (the free-motion data to learn from)",
+                    )
+                    .hint("add [observer.training] with data = \"free_motion.toml\" (or a recorded FILE.csv) and validation = ..."),
+                ),
+                Some(t) => {
+                    if t.nodes == 0 {
+                        out.push(Invalid::new("observer.training.nodes", "must be at least 1"));
+                    }
+                    if !(t.width_scale.is_finite() && t.width_scale > 0.0) {
+                        out.push(Invalid::new(
+                            "observer.training.width_scale",
+                            format!("is {}, must be finite and > 0", t.width_scale),
+                        ));
+                    }
+                    if t.width_neighbours == 0 {
+                        out.push(Invalid::new(
+                            "observer.training.width_neighbours",
+                            "must be at least 1",
+                        ));
+                    }
+                    if t.friction_features
+                        && (t.friction_scales.is_empty()
+                            || t.friction_scales.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+                    {
+                        out.push(Invalid::new(
+                            "observer.training.friction_scales",
+                            format!(
+                                "is {:?}, must be a non-empty list of finite values > 0 (rad/s)",
+                                t.friction_scales
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+}
