@@ -20,7 +20,7 @@ use toml::{Table, Value};
 use crate::convert::{shape_text, value_error};
 
 /// One Python value as TOML; `None` gives `None` (the key is left out).
-fn to_toml(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Option<Value>> {
+pub fn to_toml(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Option<Value>> {
     if obj.is_none() {
         return Ok(None);
     }

@@ -7,6 +7,7 @@
 //! * [`control`]: the controllers; [`observers`]: the external-torque observers and the
 //!   observers' input filter; [`admittance`]: the admittance model;
 //! * [`network`]: training, growing, saving and loading the observer's network;
+//! * [`run`]: a scenario run, as `admittance run`;
 //! * [`config`]: configuration dicts with the scenario files' keys; [`convert`]: arrays
 //!   and errors.
 
@@ -19,6 +20,7 @@ mod convert;
 mod model;
 mod network;
 mod observers;
+mod run;
 
 use pyo3::prelude::*;
 
@@ -37,6 +39,7 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(model::aba, m)?,
         wrap_pyfunction!(network::train, m)?,
         wrap_pyfunction!(network::load_network, m)?,
+        wrap_pyfunction!(run::run, m)?,
     ] {
         m.add_function(f)?;
     }
@@ -52,5 +55,6 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<observers::PyInputConditioner>()?;
     m.add_class::<admittance::PyAdmittance>()?;
     m.add_class::<network::PyNetwork>()?;
+    m.add("RunFailed", m.py().get_type::<run::RunFailed>())?;
     Ok(())
 }

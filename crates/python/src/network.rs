@@ -190,8 +190,8 @@ fn training_arrays(
             "`input_filter_hz` is {input_filter_hz}, must be >= 0 (0: the columns as recorded)"
         )));
     }
-    let (x, mut y) =
-        admittance_scenario::observer_training_arrays(&data, input_filter_hz).map_err(|e| {
+    let (x, mut y) = admittance_scenario::observer_training_arrays(&data, input_filter_hz)
+        .map_err(|e| {
             value_error(format!(
                 "`input_filter_hz` {input_filter_hz} with the data of {source}: {e}"
             ))

@@ -3,7 +3,7 @@
 Thin bindings of the Rust crates (crates/python; docs/python.md): rigid-body dynamics of an
 arm loaded from its URDF, the paper's neural controller and the baselines, the
 external-torque observers, the admittance model with its reference saturation, and the
-learned observer's network (train, grow, save, load). Arrays are float64 numpy arrays; any
+learned observer's network (train, grow, save, load), and scenario runs (`run`). Arrays are float64 numpy arrays; any
 array-like is accepted and checked for shape.
 """
 
@@ -21,6 +21,7 @@ from ._admittance import (
     Observer,
     OracleObserver,
     PdController,
+    RunFailed,
     __version__,
     aba,
     coriolis,
@@ -28,6 +29,7 @@ from ._admittance import (
     gravity,
     load_network,
     rnea,
+    run,
     tip_jacobian,
     tip_pose,
     train,
@@ -47,6 +49,7 @@ __all__ = [
     "Observer",
     "OracleObserver",
     "PdController",
+    "RunFailed",
     "__version__",
     "aba",
     "coriolis",
@@ -54,6 +57,7 @@ __all__ = [
     "gravity",
     "load_network",
     "rnea",
+    "run",
     "tip_jacobian",
     "tip_pose",
     "train",

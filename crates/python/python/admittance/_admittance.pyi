@@ -7,6 +7,7 @@ return new arrays unless ``out=`` names a writeable float64 array of the result'
 is then written and returned.
 """
 
+import pathlib
 from os import PathLike
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
@@ -373,3 +374,29 @@ def train(
 def load_network(path: StrPath) -> Network:
     """Loads a network written by ``Network.save`` or ``admittance train``."""
 
+
+class RunFailed(RuntimeError):
+    """A scenario run that wrote its folder but failed (a variant diverged or a metric is not
+    finite); ``args[0]`` says which, ``summary`` holds the summary dict and ``out`` the
+    folder."""
+
+    summary: dict
+    out: pathlib.Path
+
+def run(
+    scenario_path: StrPath,
+    out: StrPath,
+    variant: Optional[str] = None,
+    overrides: Optional[Union[Mapping[str, object], Sequence[str]]] = None,
+    *,
+    seed: Optional[int] = None,
+    force: bool = False,
+    report: bool = True,
+    recording: bool = True,
+) -> dict:
+    """Runs a scenario file as ``admittance run SCENARIO --out OUT`` does and returns
+    ``summary.json`` as a dict. ``overrides`` are the command line's ``--set``: a dict
+    ``{"duration": 5}`` or ``"key=value"`` strings. ``force`` replaces a folder the tool did
+    not write; ``report`` draws the figures and reports. Raises ``ValueError`` for a bad
+    scenario or override, ``FileExistsError`` when ``out`` may not be written, ``OSError`` when
+    writing fails and ``RunFailed`` when a variant failed. Releases the GIL."""
