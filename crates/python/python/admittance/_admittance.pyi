@@ -1,0 +1,402 @@
+"""Type stubs of the native module ``admittance._admittance`` (re-exported by ``admittance``).
+
+Conventions: SI units; joint vectors are float64 arrays of shape ``(n,)`` in the chain order
+of the model (``Model.joint_names``); any array-like is accepted and converted, and an
+argument of the wrong shape is a ``ValueError`` naming it and the expected shape. Functions
+return new arrays unless ``out=`` names a writeable float64 array of the result's shape, which
+is then written and returned.
+"""
+
+import pathlib
+from os import PathLike
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+Vector = npt.NDArray[np.float64]
+Matrix = npt.NDArray[np.float64]
+StrPath = Union[str, "PathLike[str]"]
+Config = Mapping[str, Any]
+#: Free-motion data: a CSV path, or a dict with ``t`` ``(N,)`` and ``q``, ``qdot``, ``qddot``,
+#: ``tau`` as ``(N, n)`` arrays (or the CSV column names ``q.JOINT`` ... as ``(N,)`` arrays).
+FreeMotionData = Union[StrPath, Mapping[str, ArrayLike]]
+
+__version__: str
+
+class Model:
+    """A serial arm loaded from a URDF: the chain from a base link to a tip link.
+
+    Immutable; build it once and pass it to the dynamics functions, controllers and observers.
+    """
+
+    @staticmethod
+    def from_urdf(path: StrPath, base: Optional[str] = None, tip: Optional[str] = None) -> "Model":
+        """Loads the chain between ``base`` (default: the root link) and ``tip`` (default: the
+        single leaf link). A bad file is a ``ValueError`` naming the file, line and element; a
+        missing one an ``OSError``."""
+    @staticmethod
+    def from_urdf_string(
+        text: str, base: Optional[str] = None, tip: Optional[str] = None, source: str = "<string>"
+    ) -> "Model":
+        """Loads the chain from URDF text (``source`` names it in error messages)."""
+    @property
+    def n(self) -> int:
+        """Number of moving joints."""
+    @property
+    def joint_names(self) -> list[str]:
+        """Names of the moving joints, in chain order."""
+    @property
+    def lower(self) -> Vector:
+        """Lower position limits ``(n,)`` (``-inf`` where the URDF gives none)."""
+    @property
+    def upper(self) -> Vector:
+        """Upper position limits ``(n,)`` (``inf`` where the URDF gives none)."""
+    @property
+    def velocity_limit(self) -> Vector:
+        """Velocity limits ``(n,)`` (``inf`` where the URDF gives none)."""
+    @property
+    def effort_limit(self) -> Vector:
+        """Effort limits ``(n,)`` (``inf`` where the URDF gives none)."""
+    @property
+    def gravity(self) -> Vector:
+        """Gravity in the base frame ``(3,)``, m/s^2."""
+    @property
+    def base_link(self) -> str:
+        """The base link's name."""
+    @property
+    def tip_link(self) -> str:
+        """The tip frame's name."""
+    @property
+    def total_moving_mass(self) -> float:
+        """Total mass of the moving bodies, kg."""
+    def with_gravity(self, g: ArrayLike) -> "Model":
+        """A copy with gravity ``g`` ``(3,)`` in the base frame."""
+    def with_scaled_inertias(self, scale: float) -> "Model":
+        """A copy with every body's mass and inertia multiplied by ``scale`` (> 0)."""
+
+def rnea(m: Model, q: ArrayLike, v: ArrayLike, a: ArrayLike, *, out: Optional[Vector] = None) -> Vector:
+    """Inverse dynamics ``tau = M(q) a + C(q, v) v + G(q)``, ``(n,)``."""
+
+def crba(m: Model, q: ArrayLike, *, out: Optional[Matrix] = None) -> Matrix:
+    """Joint-space inertia matrix ``M(q)``, ``(n, n)``."""
+
+def gravity(m: Model, q: ArrayLike, *, out: Optional[Vector] = None) -> Vector:
+    """Gravity torque ``G(q)``, ``(n,)``."""
+
+def coriolis(m: Model, q: ArrayLike, v: ArrayLike, *, out: Optional[Matrix] = None) -> Matrix:
+    """Coriolis matrix ``C(q, v)`` with ``dM/dt = C + C^T``, ``(n, n)``."""
+
+def tip_pose(m: Model, q: ArrayLike) -> Tuple[Vector, Matrix]:
+    """Pose of the tip frame in the base frame: ``(position (3,), rotation (3, 3))``."""
+
+def tip_jacobian(m: Model, q: ArrayLike, *, out: Optional[Matrix] = None) -> Matrix:
+    """Geometric Jacobian of the tip, ``(6, n)``: linear rows first, base axes, at the tip's
+    origin."""
+
+def aba(m: Model, q: ArrayLike, v: ArrayLike, tau: ArrayLike, *, out: Optional[Vector] = None) -> Vector:
+    """Forward dynamics ``qddot = M(q)^-1 (tau - C(q, v) v - G(q))``, ``(n,)``."""
+
+class Controller:
+    """A joint-torque controller (base of the three controllers; not constructed directly).
+
+    ``step`` never raises on bad numbers: on a non-finite or stale measurement, a non-finite
+    reference or estimate, or an invalid ``dt`` it returns the safe hold (nominal gravity at the
+    last valid position minus damping, within the effort limits), freezes adaptation and
+    records the fault in ``fault`` / ``fault_count``.
+    """
+
+    def step(
+        self,
+        t: float,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        q_ref: ArrayLike,
+        qdot_ref: ArrayLike,
+        qddot_ref: ArrayLike,
+        tau_ext_hat: ArrayLike,
+        dt: float,
+        *,
+        out: Optional[Vector] = None,
+    ) -> Vector:
+        """One control step of length ``dt``: the commanded torque ``(n,)``, finite and within
+        the effort limits."""
+    def reset(self) -> None:
+        """Back to the state just after construction (learned weights included)."""
+    @property
+    def name(self) -> str:
+        """``"nn"``, ``"pd"``, ``"pd_gravity"`` or ``"computed_torque"``."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+    @property
+    def fault(self) -> Optional[str]:
+        """What the last ``step`` faulted on (and held safely instead), or ``None``."""
+    @property
+    def fault_count(self) -> int:
+        """Steps that faulted since construction or ``reset``."""
+
+class NeuralController(Controller):
+    """The paper's adaptive RBF neural controller with deadzone compensation on the nominal
+    model ``m``. ``config``: the keys of a scenario's ``[controller.neural]`` table (``k1``,
+    ``k2``, ``f``, ``deadzone_compensation``, ``deadzone_network``, ``deadzone_inverse``,
+    ``adaptation``, ``track_relevance``, ``safe_hold``); ``None``: the paper's experiment A."""
+
+    def __init__(self, m: Model, config: Optional[Config] = None) -> None: ...
+
+class PdController(Controller):
+    """Joint PD (plus the nominal gravity with ``gravity_compensation``). ``config``: the keys of
+    ``[controller.pd]``: ``kp``, ``kd`` (a number or one per joint), ``gravity_compensation``,
+    ``safe_hold``."""
+
+    def __init__(self, m: Model, config: Config) -> None: ...
+
+class ComputedTorqueController(Controller):
+    """Computed torque with the nominal model ``m``. ``config``: the keys of
+    ``[controller.computed_torque]``: ``kp``, ``kd``, ``safe_hold``."""
+
+    def __init__(self, m: Model, config: Config) -> None: ...
+
+class Observer:
+    """An external-torque observer (base of the observers; not constructed directly). The
+    estimate is the torque the environment applies to the robot.
+
+    ``update`` never raises on bad numbers: on a non-finite input or an invalid ``dt`` it
+    returns zeros and records the fault in ``fault`` / ``fault_count``.
+    """
+
+    def update(
+        self,
+        t: float,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        qddot: ArrayLike,
+        tau: ArrayLike,
+        dt: float,
+        *,
+        out: Optional[Vector] = None,
+    ) -> Vector:
+        """One update with the sample at ``t`` of a period ``dt``: the estimate ``(n,)``.
+        ``tau`` is the commanded torque (for a learned network: the torque signal of its
+        training data)."""
+    def reset(self) -> None:
+        """Back to the state just after construction."""
+    @property
+    def name(self) -> str:
+        """``"momentum"``, ``"learned"``, ``"hybrid"`` or ``"oracle"``."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+    @property
+    def fault(self) -> Optional[str]:
+        """What the last ``update`` faulted on (its estimate was zero), or ``None``."""
+    @property
+    def fault_count(self) -> int:
+        """Updates that faulted since construction or ``reset``."""
+
+class MomentumObserver(Observer):
+    """The generalised-momentum observer on the nominal model ``m``: a first-order lag of the
+    external torque (less unmodelled friction) with time constant ``1 / gain`` (default 50
+    1/s). ``gain``: a number or one per joint; or ``config``: the keys of
+    ``[observer.momentum]``."""
+
+    def __init__(
+        self, m: Model, gain: Optional[Union[float, ArrayLike]] = None, config: Optional[Config] = None
+    ) -> None: ...
+
+class LearnedObserver(Observer):
+    """The paper's learned observer ``LP(f_hat(q, qdot, qddot) - tau)`` with a network from
+    ``train`` or ``load_network`` and a first-order low-pass at ``cutoff_hz`` (0: none)."""
+
+    def __init__(self, network: "Network", cutoff_hz: float = 0.0) -> None: ...
+
+class HybridObserver(Observer):
+    """The momentum observer on the nominal model ``m`` with the torque corrected by a
+    network trained on what ``m`` misses (``train(..., nominal=m)``)."""
+
+    def __init__(
+        self,
+        m: Model,
+        network: "Network",
+        gain: Optional[Union[float, ArrayLike]] = None,
+        config: Optional[Config] = None,
+    ) -> None: ...
+
+class OracleObserver(Observer):
+    """Returns the true external torque given by ``set_true_value`` (simulation only)."""
+
+    def __init__(self, n: int) -> None: ...
+    def set_true_value(self, tau_ext: ArrayLike) -> None:
+        """Sets the value ``(n,)`` the next ``update`` returns."""
+
+class InputConditioner:
+    """The observers' second input filter: a 2nd-order Butterworth low-pass at ``cutoff_hz`` on
+    angles and torques sampled at ``rate_hz``, the filtered angles differentiated twice (the
+    ``input_filter_hz`` of ``train`` and of the scenario files)."""
+
+    def __init__(self, n: int, cutoff_hz: float, rate_hz: float) -> None: ...
+    def update(self, q: ArrayLike, tau: ArrayLike) -> Tuple[Vector, Vector, Vector, Vector]:
+        """One sample; returns the conditioned ``(q, qdot, qddot, tau)``."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+
+class Admittance:
+    """The admittance model ``M_d (q_a'' - q_d'') + C_d (q_a' - q_d') + G_d (q_a - q_d) =
+    tau_ext_hat`` with the smooth saturation of the reference.
+
+    ``damping``, ``stiffness``, ``mass`` (optional): a number or one per joint. ``rho``: the
+    saturation's linear fraction (``None``: no saturation). ``bound``: ``None`` takes the range
+    from the joint limits of ``m`` (joints without finite limits unsaturated); a number or one
+    per joint is the half-range about 0 (``inf``: unsaturated). ``step`` never raises on bad
+    numbers: it holds the last reference and records the fault.
+    """
+
+    def __init__(
+        self,
+        m: Model,
+        damping: Union[float, ArrayLike],
+        stiffness: Union[float, ArrayLike],
+        mass: Optional[Union[float, ArrayLike]] = None,
+        rho: Optional[float] = 0.95,
+        bound: Optional[Union[float, ArrayLike]] = None,
+    ) -> None: ...
+    @staticmethod
+    def from_config(m: Model, config: Config) -> "Admittance":
+        """From the keys of a scenario's ``[admittance]`` table (``damping``, ``stiffness``,
+        ``inertia``, ``saturation = {rho, centre, half_range}``)."""
+    def step(
+        self,
+        q_d: ArrayLike,
+        qdot_d: ArrayLike,
+        qddot_d: ArrayLike,
+        tau_ext_hat: ArrayLike,
+        dt: float,
+        *,
+        out: Optional[Tuple[Vector, Vector, Vector]] = None,
+    ) -> Tuple[Vector, Vector, Vector]:
+        """Advances by ``dt``; returns the compliant reference ``(q_r, qdot_r, qddot_r)``."""
+    def reset(self) -> None:
+        """Back to zero deviation."""
+    @property
+    def q_a(self) -> Vector:
+        """The unsaturated admittance state after the last step."""
+    @property
+    def deviation(self) -> Vector:
+        """``q_a - q_d`` after the last step."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+    @property
+    def fault(self) -> Optional[str]:
+        """What the last ``step`` faulted on, or ``None``."""
+    @property
+    def fault_count(self) -> int:
+        """Steps that faulted since construction or ``reset``."""
+
+class Network:
+    """A trained flat RBF network of the learned or hybrid observer (inputs ``[q, qdot,
+    qddot]``, one output per joint)."""
+
+    def grow(
+        self,
+        nodes: int,
+        data: FreeMotionData,
+        *,
+        validation: Optional[FreeMotionData] = None,
+        validation_fraction: Optional[float] = None,
+        input_filter_hz: Optional[float] = None,
+        nominal: Optional[Model] = None,
+        seed: int = 1,
+    ) -> None:
+        """Adds ``nodes`` nodes without retraining; ``data`` must be the training data. Options
+        default to how the network was trained. Releases the GIL."""
+    def predict(
+        self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike, *, out: Optional[npt.NDArray[np.float64]] = None
+    ) -> npt.NDArray[np.float64]:
+        """The output for ``(n,)`` inputs (returns ``(n,)``) or ``(N, n)`` inputs (returns
+        ``(N, n)``)."""
+    def save(self, path: StrPath) -> None:
+        """Writes the network (versioned, checksummed, atomically)."""
+    @property
+    def nodes(self) -> int:
+        """Gaussian enhancement nodes."""
+    @property
+    def n_inputs(self) -> int:
+        """Inputs per sample (3n)."""
+    @property
+    def n_outputs(self) -> int:
+        """Outputs per sample (n)."""
+    @property
+    def friction_features(self) -> bool:
+        """Whether the network has ``tanh(qdot / v)`` inputs."""
+    @property
+    def ridge_lambda(self) -> float:
+        """The chosen ridge parameter."""
+    @property
+    def validation_nrmse(self) -> Optional[Vector]:
+        """Per-joint validation NRMSE after training or the last ``grow``; ``None`` when
+        loaded."""
+    @property
+    def samples(self) -> Optional[int]:
+        """Training rows behind the network."""
+    @property
+    def validation_samples(self) -> Optional[int]:
+        """Validation rows (``None`` when loaded)."""
+    @property
+    def seconds(self) -> Optional[float]:
+        """Wall time of the fit or of the last ``grow`` (``None`` when loaded)."""
+    @property
+    def can_grow(self) -> bool:
+        """Whether the network holds the Gram matrix that ``grow`` needs."""
+
+def train(
+    data: FreeMotionData,
+    m: Model,
+    nodes: int = 1000,
+    *,
+    friction_features: bool = False,
+    friction_scales: Optional[Sequence[float]] = None,
+    input_filter_hz: float = 0.0,
+    validation_fraction: Optional[float] = None,
+    validation: Optional[FreeMotionData] = None,
+    seed: Optional[int] = None,
+    width_scale: float = 2.0,
+    width_neighbours: int = 8,
+    nominal: Optional[Model] = None,
+) -> Network:
+    """Fits the learned observer's network to free-motion data (``admittance train``): the last
+    ``validation_fraction`` (default 0.2) of the rows, or a separate ``validation`` set, choose
+    the ridge parameter and give ``validation_nrmse``. ``nominal``: learn the hybrid observer's
+    residual ``tau - RNEA_nominal`` instead of ``tau``. Releases the GIL."""
+
+def load_network(path: StrPath) -> Network:
+    """Loads a network written by ``Network.save`` or ``admittance train``."""
+
+
+class RunFailed(RuntimeError):
+    """A scenario run that wrote its folder but failed (a variant diverged or a metric is not
+    finite); ``args[0]`` says which, ``summary`` holds the summary dict and ``out`` the
+    folder."""
+
+    summary: dict
+    out: pathlib.Path
+
+def run(
+    scenario_path: StrPath,
+    out: StrPath,
+    variant: Optional[str] = None,
+    overrides: Optional[Union[Mapping[str, object], Sequence[str]]] = None,
+    *,
+    seed: Optional[int] = None,
+    force: bool = False,
+    report: bool = True,
+    recording: bool = True,
+) -> dict:
+    """Runs a scenario file as ``admittance run SCENARIO --out OUT`` does and returns
+    ``summary.json`` as a dict. ``overrides`` are the command line's ``--set``: a dict
+    ``{"duration": 5}`` or ``"key=value"`` strings. ``force`` replaces a folder the tool did
+    not write; ``report`` draws the figures and reports. Raises ``ValueError`` for a bad
+    scenario or override, ``FileExistsError`` when ``out`` may not be written, ``OSError`` when
+    writing fails and ``RunFailed`` when a variant failed. Releases the GIL."""

@@ -1,0 +1,60 @@
+//! Python bindings of `admittance` (issue 15, part 1): the package `admittance`, built by
+//! maturin from this crate (`pip install ./crates/python`). Thin: every function converts
+//! its arguments, calls the Rust crates and converts the result; nothing is computed here
+//! that the Rust API does not compute (docs/python.md).
+//!
+//! * [`model`]: `Model` and the dynamics functions;
+//! * [`control`]: the controllers; [`observers`]: the external-torque observers and the
+//!   observers' input filter; [`admittance`]: the admittance model;
+//! * [`network`]: training, growing, saving and loading the observer's network;
+//! * [`run`]: a scenario run, as `admittance run`;
+//! * [`config`]: configuration dicts with the scenario files' keys; [`convert`]: arrays
+//!   and errors.
+
+#![warn(missing_docs)]
+
+mod admittance;
+mod config;
+mod control;
+mod convert;
+mod model;
+mod network;
+mod observers;
+mod run;
+
+use pyo3::prelude::*;
+
+/// The native module `admittance._admittance`; the package `admittance` re-exports it.
+#[pymodule]
+fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<model::PyModel>()?;
+    for f in [
+        wrap_pyfunction!(model::rnea, m)?,
+        wrap_pyfunction!(model::crba, m)?,
+        wrap_pyfunction!(model::gravity, m)?,
+        wrap_pyfunction!(model::coriolis, m)?,
+        wrap_pyfunction!(model::tip_pose, m)?,
+        wrap_pyfunction!(model::tip_jacobian, m)?,
+        wrap_pyfunction!(model::aba, m)?,
+        wrap_pyfunction!(network::train, m)?,
+        wrap_pyfunction!(network::load_network, m)?,
+        wrap_pyfunction!(run::run, m)?,
+    ] {
+        m.add_function(f)?;
+    }
+    m.add_class::<control::PyController>()?;
+    m.add_class::<control::PyNeuralController>()?;
+    m.add_class::<control::PyPdController>()?;
+    m.add_class::<control::PyComputedTorqueController>()?;
+    m.add_class::<observers::PyObserver>()?;
+    m.add_class::<observers::PyMomentumObserver>()?;
+    m.add_class::<observers::PyLearnedObserver>()?;
+    m.add_class::<observers::PyHybridObserver>()?;
+    m.add_class::<observers::PyOracleObserver>()?;
+    m.add_class::<observers::PyInputConditioner>()?;
+    m.add_class::<admittance::PyAdmittance>()?;
+    m.add_class::<network::PyNetwork>()?;
+    m.add("RunFailed", m.py().get_type::<run::RunFailed>())?;
+    Ok(())
+}

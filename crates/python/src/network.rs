@@ -1,0 +1,639 @@
+//! The learned observer's network (METHOD.md section 5): `train`, `Network` (`grow`,
+//! `predict`, `save`) and `load_network`, as `admittance train` / `admittance grow` do it
+//! (crates/cli/src/train_cmd.rs): free-motion data from a CSV file or a dict of arrays,
+//! inputs `[q, qdot, qddot]` through the optional input conditioning, the last
+//! `validation_fraction` of the rows held out (or a separate validation set), the
+//! ridge parameter chosen on the validation rows. The GIL is released while files are read
+//! and while the network is fitted, grown or evaluated.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use admittance_dynamics::{rnea, Data, Model};
+use admittance_learning::broad::{
+    fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec, WidthRule,
+};
+use admittance_scenario::FreeMotionData;
+use numpy::PyArray1;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{
+    broad_error, column, free_motion_error, matrix_out, rows, value_error, vector_out,
+};
+use crate::model::PyModel;
+
+/// How a network was trained, so that `grow` can rebuild the same training rows.
+#[derive(Clone)]
+struct TrainOptions {
+    /// `None`: a separate validation set was given (every data row trained).
+    validation_fraction: Option<f64>,
+    input_filter_hz: f64,
+    nominal: Option<Arc<Model>>,
+    joints: Vec<String>,
+}
+
+/// Free-motion data as given: a CSV file (read later, without the GIL) or arrays.
+enum DataArg {
+    Csv(PathBuf),
+    Arrays(FreeMotionData),
+}
+
+/// The signals of a data dict: `t` `(N,)` and `q`, `qdot`, `qddot`, `tau` as `(N, n)`
+/// arrays, or the CSV column names (`q.JOINT`, ...) as `(N,)` arrays.
+fn dict_data(
+    d: &Bound<'_, PyDict>,
+    arg: &str,
+    n: usize,
+    joints: Option<&[String]>,
+) -> PyResult<FreeMotionData> {
+    let t_obj = d.get_item("t")?.ok_or_else(|| {
+        value_error(format!(
+            "`{arg}` has no key 't' (the sample times, shape (N,))"
+        ))
+    })?;
+    let t = column(&t_obj, &format!("{arg}['t']"), None)?;
+    let rows_n = t.len();
+    if rows_n == 0 {
+        return Err(value_error(format!("`{arg}` has no samples")));
+    }
+    if let Some((k, v)) = crate::convert::first_non_finite(&t) {
+        return Err(value_error(format!(
+            "`{arg}['t']` row {k} is {v}; give finite values"
+        )));
+    }
+    for (k, w) in t.windows(2).enumerate() {
+        if w[1] <= w[0] {
+            return Err(value_error(format!(
+                "`{arg}['t']` does not increase strictly at row {}: {} after {}",
+                k + 1,
+                w[1],
+                w[0]
+            )));
+        }
+    }
+    let mut signals: Vec<Vec<f64>> = Vec::with_capacity(4);
+    for sig in ["q", "qdot", "qddot", "tau"] {
+        let values = if let Some(obj) = d.get_item(sig)? {
+            let name = format!("{arg}['{sig}']");
+            if n == 1 {
+                if let Ok(v) = column(&obj, &name, Some(rows_n)) {
+                    v
+                } else {
+                    checked_rows(&obj, &name, rows_n, n)?
+                }
+            } else {
+                checked_rows(&obj, &name, rows_n, n)?
+            }
+        } else {
+            let Some(joints) = joints else {
+                return Err(value_error(format!(
+                    "`{arg}` has no key '{sig}' (an (N, {n}) array; per-joint columns '{sig}.JOINT' need the joint names, which a loaded network does not know)"
+                )));
+            };
+            let mut cols = Vec::with_capacity(n);
+            for j in joints {
+                let key = format!("{sig}.{j}");
+                let obj = d.get_item(&key)?.ok_or_else(|| {
+                    value_error(format!(
+                        "`{arg}` has neither '{sig}' (an (N, {n}) array) nor the column '{key}'"
+                    ))
+                })?;
+                cols.push(column(&obj, &format!("{arg}['{key}']"), Some(rows_n))?);
+            }
+            (0..rows_n)
+                .flat_map(|r| cols.iter().map(move |c| c[r]))
+                .collect()
+        };
+        if let Some((k, v)) = crate::convert::first_non_finite(&values) {
+            return Err(value_error(format!(
+                "`{arg}`: '{sig}' row {}, joint {} is {v}; give finite values",
+                k / n,
+                k % n
+            )));
+        }
+        signals.push(values);
+    }
+    let tau = signals.pop().unwrap_or_default();
+    let qddot = signals.pop().unwrap_or_default();
+    let qdot = signals.pop().unwrap_or_default();
+    let q = signals.pop().unwrap_or_default();
+    Ok(FreeMotionData {
+        joints: joints
+            .map(<[String]>::to_vec)
+            .unwrap_or_else(|| (0..n).map(|i| format!("joint{i}")).collect()),
+        t,
+        q,
+        qdot,
+        qddot,
+        tau,
+    })
+}
+
+fn checked_rows(obj: &Bound<'_, PyAny>, name: &str, rows_n: usize, n: usize) -> PyResult<Vec<f64>> {
+    let (v, r, _) = rows(obj, name, n, false)?;
+    if r != rows_n {
+        return Err(value_error(format!(
+            "`{name}` must have shape ({rows_n}, {n}) (one row per sample of 't'), got {r} rows"
+        )));
+    }
+    Ok(v)
+}
+
+fn data_arg(
+    obj: &Bound<'_, PyAny>,
+    arg: &str,
+    n: usize,
+    joints: Option<&[String]>,
+) -> PyResult<DataArg> {
+    if let Ok(d) = obj.cast::<PyDict>() {
+        return dict_data(d, arg, n, joints).map(DataArg::Arrays);
+    }
+    match obj.extract::<PathBuf>() {
+        Ok(p) => Ok(DataArg::Csv(p)),
+        Err(_) => Err(PyTypeError::new_err(format!(
+            "`{arg}` must be the path of a free-motion CSV file or a dict of arrays (t, q, qdot, qddot, tau)"
+        ))),
+    }
+}
+
+/// Reads the data (CSV files here, without the GIL), checks its joints, and forms the rows
+/// `[q, qdot, qddot]` and targets (`tau`, or `tau - RNEA_nominal` for a hybrid residual).
+fn training_arrays(
+    data: DataArg,
+    arg: &str,
+    n: usize,
+    joints: Option<&[String]>,
+    input_filter_hz: f64,
+    nominal: Option<&Model>,
+) -> PyResult<(Vec<f64>, Vec<f64>, usize)> {
+    let (data, source) = match data {
+        DataArg::Csv(path) => (
+            FreeMotionData::load(&path).map_err(free_motion_error)?,
+            path.display().to_string(),
+        ),
+        DataArg::Arrays(d) => (d, format!("`{arg}`")),
+    };
+    let names_differ = joints.is_some_and(|j| data.joints != j);
+    if data.dof() != n || names_differ {
+        return Err(value_error(format!(
+            "{source}: joints [{}] are not the arm's [{}] (chain order)",
+            data.joints.join(", "),
+            joints
+                .map(|j| j.join(", "))
+                .unwrap_or_else(|| format!("{n} joints"))
+        )));
+    }
+    if !(input_filter_hz.is_finite() && input_filter_hz >= 0.0) {
+        return Err(value_error(format!(
+            "`input_filter_hz` is {input_filter_hz}, must be >= 0 (0: the columns as recorded)"
+        )));
+    }
+    let (x, mut y) = admittance_scenario::observer_training_arrays(&data, input_filter_hz)
+        .map_err(|e| {
+            value_error(format!(
+                "`input_filter_hz` {input_filter_hz} with the data of {source}: {e}"
+            ))
+        })?;
+    if let Some(model) = nominal {
+        // What the nominal model misses: the hybrid observer's residual network, as the
+        // scenarios train it (admittance_scenario training).
+        let mut d = Data::new(model);
+        for (row, target) in x.chunks_exact(3 * n).zip(y.chunks_exact_mut(n)) {
+            let tau = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
+                .map_err(|e| value_error(format!("`nominal`: {e}")))?;
+            target.iter_mut().zip(tau.iter()).for_each(|(t, m)| *t -= m);
+        }
+    }
+    Ok((x, y, data.len()))
+}
+
+fn check_fraction(f: f64) -> PyResult<f64> {
+    if f > 0.0 && f < 1.0 {
+        Ok(f)
+    } else {
+        Err(value_error(format!(
+            "`validation_fraction` is {f}, must be in (0, 1)"
+        )))
+    }
+}
+
+/// Training and validation rows: a split of `data` at `1 - fraction`, or all of `data` and
+/// the separate `validation` set.
+struct Split {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    xv: Vec<f64>,
+    yv: Vec<f64>,
+}
+
+impl Split {
+    fn new(
+        (x, y, rows_n): (Vec<f64>, Vec<f64>, usize),
+        validation: Option<(Vec<f64>, Vec<f64>, usize)>,
+        fraction: Option<f64>,
+        n: usize,
+    ) -> PyResult<Self> {
+        match (validation, fraction) {
+            (Some((xv, yv, _)), _) => Ok(Split { x, y, xv, yv }),
+            (None, Some(f)) => {
+                let train_rows = ((rows_n as f64) * (1.0 - f)).floor() as usize;
+                if train_rows < 2 || train_rows >= rows_n {
+                    return Err(value_error(format!(
+                        "{rows_n} rows are too few to hold out a validation fraction of {f}"
+                    )));
+                }
+                let (x, xv) = (x[..train_rows * 3 * n].to_vec(), x[train_rows * 3 * n..].to_vec());
+                let (y, yv) = (y[..train_rows * n].to_vec(), y[train_rows * n..].to_vec());
+                Ok(Split { x, y, xv, yv })
+            }
+            (None, None) => Err(value_error(
+                "this network was trained with a separate validation set: pass `validation=` (the same data) to grow it",
+            )),
+        }
+    }
+
+    fn sets(&self, n: usize) -> PyResult<(Dataset<'_>, Dataset<'_>)> {
+        let train = Dataset::new(&self.x, &self.y, 3 * n, n).map_err(broad_error)?;
+        let val = Dataset::new(&self.xv, &self.yv, 3 * n, n).map_err(broad_error)?;
+        Ok((train, val))
+    }
+}
+
+fn require_finite_metrics(nrmse: &[f64], what: &str) -> PyResult<()> {
+    if nrmse.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(PyRuntimeError::new_err(format!(
+            "{what} failed: the validation NRMSE is not finite ({nrmse:?})"
+        )))
+    }
+}
+
+/// A trained flat RBF network of the learned (or hybrid) observer: inputs `[q, qdot,
+/// qddot]`, outputs one torque per joint. From `train` or `load_network`.
+#[pyclass(module = "admittance._admittance", name = "Network")]
+pub struct PyNetwork {
+    pub(crate) model: BroadModel,
+    validation_nrmse: Option<Vec<f64>>,
+    samples: Option<usize>,
+    validation_samples: Option<usize>,
+    seconds: Option<f64>,
+    options: Option<TrainOptions>,
+}
+
+impl PyNetwork {
+    fn joints(&self) -> usize {
+        self.model.d_out()
+    }
+
+    /// A copy for an observer, without the growth state (the Gram matrix and its factor).
+    pub(crate) fn deployment_copy(&self) -> BroadModel {
+        let mut m = self.model.clone();
+        m.strip_growth_state();
+        m
+    }
+}
+
+/// Fits the learned observer's network to free-motion data (what `admittance train` does).
+///
+/// `data`: the path of a free-motion CSV file (columns `t`, `q.JOINT`, `qdot.JOINT`,
+/// `qddot.JOINT`, `tau.JOINT`; docs/outputs.md) or a dict with `t` `(N,)` and `q`, `qdot`,
+/// `qddot`, `tau` as `(N, n)` arrays in the chain order of `m` (or the CSV column names as
+/// `(N,)` arrays). `nodes`: Gaussian enhancement nodes. `friction_features`: add
+/// `tanh(qdot / v)` inputs (`friction_scales` v, default 0.01, 0.05, 0.2 rad/s).
+/// `input_filter_hz`: the observers' second input filter (0: the columns as recorded; the
+/// observer must then be fed through `InputConditioner` with the same cut-off).
+/// `validation_fraction` (default 0.2): the last rows held out to choose the ridge
+/// parameter and measure the validation NRMSE; or `validation`: a separate data set (a
+/// different excitation) for that, every row of `data` then trains. `nominal`: train the
+/// hybrid observer's residual `tau - RNEA_nominal(q, qdot, qddot)` instead of `tau`.
+/// `seed`, `width_scale`, `width_neighbours`: centre placement and widths (the scenario
+/// files' `[observer.training]` keys). The GIL is released while it reads and fits.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (data, m, nodes=1000, *, friction_features=false, friction_scales=None,
+    input_filter_hz=0.0, validation_fraction=None, validation=None, seed=None,
+    width_scale=2.0, width_neighbours=8, nominal=None))]
+pub fn train(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    m: &Bound<'_, PyModel>,
+    nodes: usize,
+    friction_features: bool,
+    friction_scales: Option<Vec<f64>>,
+    input_filter_hz: f64,
+    validation_fraction: Option<f64>,
+    validation: Option<&Bound<'_, PyAny>>,
+    seed: Option<u64>,
+    width_scale: f64,
+    width_neighbours: usize,
+    nominal: Option<&Bound<'_, PyModel>>,
+) -> PyResult<PyNetwork> {
+    let model = m.get().model.clone();
+    let n = model.nq();
+    let joints: Vec<String> = model.joint_names().map(String::from).collect();
+    let validation = validation.filter(|v| !v.is_none());
+    let fraction = match (validation, validation_fraction) {
+        (Some(_), Some(_)) => {
+            return Err(value_error(
+                "give `validation` or `validation_fraction`, not both",
+            ))
+        }
+        (Some(_), None) => None,
+        (None, f) => Some(check_fraction(f.unwrap_or(0.2))?),
+    };
+    if friction_scales.is_some() && !friction_features {
+        return Err(value_error(
+            "`friction_scales` needs `friction_features=True`",
+        ));
+    }
+    let nominal = match nominal {
+        Some(nm) => {
+            let nm = nm.get().model.clone();
+            if nm.joint_names().ne(model.joint_names()) {
+                return Err(value_error(
+                    "`nominal` must have the joints of `m`, in the same order",
+                ));
+            }
+            Some(nm)
+        }
+        None => None,
+    };
+    let train_arg = data_arg(data, "data", n, Some(&joints))?;
+    let val_arg = validation
+        .map(|v| data_arg(v, "validation", n, Some(&joints)))
+        .transpose()?;
+    let defaults = BroadConfig::default();
+    let config = BroadConfig {
+        nodes,
+        friction: if friction_features {
+            FrictionFeatures {
+                columns: (n..2 * n).collect(),
+                scales: friction_scales
+                    .unwrap_or_else(|| FrictionFeatures::joint_velocities(n).scales),
+            }
+        } else {
+            FrictionFeatures::none()
+        },
+        seed: seed.unwrap_or(defaults.seed),
+        widths: WidthRule::Knn {
+            k: width_neighbours,
+            scale: width_scale,
+        },
+        ..defaults
+    };
+    let options = TrainOptions {
+        validation_fraction: fraction,
+        input_filter_hz,
+        nominal: nominal.clone(),
+        joints: joints.clone(),
+    };
+    py.detach(move || {
+        let nominal = nominal.as_deref();
+        let train_rows = training_arrays(
+            train_arg,
+            "data",
+            n,
+            Some(&joints),
+            input_filter_hz,
+            nominal,
+        )?;
+        let val_rows = val_arg
+            .map(|v| training_arrays(v, "validation", n, Some(&joints), input_filter_hz, nominal))
+            .transpose()?;
+        let split = Split::new(train_rows, val_rows, fraction, n)?;
+        let (train_set, val_set) = split.sets(n)?;
+        let (net, report) = fit(&train_set, Some(&val_set), &config).map_err(broad_error)?;
+        require_finite_metrics(&report.validation_nrmse, "training")?;
+        Ok(PyNetwork {
+            model: net,
+            validation_nrmse: Some(report.validation_nrmse),
+            samples: Some(report.samples),
+            validation_samples: Some(report.validation_samples),
+            seconds: Some(report.times.total_s),
+            options: Some(options),
+        })
+    })
+}
+
+/// Loads a network written by `Network.save` or `admittance train` (versioned,
+/// checksummed). Its validation NRMSE and training settings are not stored in the file:
+/// those attributes are `None`, and `grow` takes the CLI's defaults.
+#[pyfunction]
+pub fn load_network(py: Python<'_>, path: PathBuf) -> PyResult<PyNetwork> {
+    let model = py.detach(|| BroadModel::load(&path)).map_err(broad_error)?;
+    Ok(PyNetwork {
+        samples: model.training_samples(),
+        model,
+        validation_nrmse: None,
+        validation_samples: None,
+        seconds: None,
+        options: None,
+    })
+}
+
+#[pymethods]
+impl PyNetwork {
+    /// Adds `nodes` Gaussian nodes without retraining (what `admittance grow` does; equal to
+    /// a retrain on the grown node set): `data` must be the data the network was trained
+    /// on, formed the same way. The options default to how this network was trained
+    /// (`validation_fraction`, `input_filter_hz`, `nominal`; for a loaded network the CLI's
+    /// defaults 0.2, 0 and none); a network trained with a separate `validation` set needs
+    /// it again. Updates `nodes` and `validation_nrmse`. The GIL is released meanwhile.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (nodes, data, *, validation=None, validation_fraction=None,
+        input_filter_hz=None, nominal=None, seed=1))]
+    fn grow(
+        &mut self,
+        py: Python<'_>,
+        nodes: usize,
+        data: &Bound<'_, PyAny>,
+        validation: Option<&Bound<'_, PyAny>>,
+        validation_fraction: Option<f64>,
+        input_filter_hz: Option<f64>,
+        nominal: Option<&Bound<'_, PyModel>>,
+        seed: u64,
+    ) -> PyResult<()> {
+        let n = self.joints();
+        let trained = self.options.clone();
+        let joints = trained.as_ref().map(|o| o.joints.clone());
+        let validation = validation.filter(|v| !v.is_none());
+        let fraction = match (validation, validation_fraction) {
+            (Some(_), Some(_)) => {
+                return Err(value_error(
+                    "give `validation` or `validation_fraction`, not both",
+                ))
+            }
+            (Some(_), None) => None,
+            (None, Some(f)) => Some(check_fraction(f)?),
+            (None, None) => match &trained {
+                Some(o) => o.validation_fraction,
+                None => Some(0.2),
+            },
+        };
+        let filter = input_filter_hz.unwrap_or(trained.as_ref().map_or(0.0, |o| o.input_filter_hz));
+        let nominal = match nominal {
+            Some(nm) => Some(nm.get().model.clone()),
+            None => trained.as_ref().and_then(|o| o.nominal.clone()),
+        };
+        let train_arg = data_arg(data, "data", n, joints.as_deref())?;
+        let val_arg = validation
+            .map(|v| data_arg(v, "validation", n, joints.as_deref()))
+            .transpose()?;
+        let config = BroadConfig {
+            friction: self.model.friction().clone(),
+            ..BroadConfig::default()
+        };
+        let net = &mut self.model;
+        let (nrmse, seconds) = py.detach(|| -> PyResult<(Vec<f64>, f64)> {
+            let nominal = nominal.as_deref();
+            let rows_t = training_arrays(train_arg, "data", n, joints.as_deref(), filter, nominal)?;
+            let rows_v = val_arg
+                .map(|v| training_arrays(v, "validation", n, joints.as_deref(), filter, nominal))
+                .transpose()?;
+            let split = Split::new(rows_t, rows_v, fraction, n)?;
+            let (train_set, val_set) = split.sets(n)?;
+            let report = net
+                .grow(
+                    &train_set,
+                    &GrowthSpec::KMeansPlusPlus { count: nodes, seed },
+                    &config,
+                )
+                .map_err(broad_error)?;
+            let nrmse = net.evaluate(&val_set, 0).map_err(broad_error)?;
+            require_finite_metrics(&nrmse, "growth")?;
+            Ok((nrmse, report.total_s))
+        })?;
+        self.validation_nrmse = Some(nrmse);
+        self.seconds = Some(seconds);
+        Ok(())
+    }
+
+    /// The network's output for inputs `q`, `qdot`, `qddot`: each `(n,)` (one sample,
+    /// returns `(n,)`) or `(N, n)` (returns `(N, n)`; the GIL is released). `out`: a
+    /// float64 array of the returned shape to write into.
+    #[pyo3(signature = (q, qdot, qddot, *, out=None))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        qddot: &Bound<'py, PyAny>,
+        out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.joints();
+        if self.model.d_in() != 3 * n {
+            return Err(value_error(format!(
+                "this network has {} inputs and {n} outputs, not the observer's [q, qdot, qddot] -> tau",
+                self.model.d_in()
+            )));
+        }
+        let (q, rq, single) = rows(q, "q", n, true)?;
+        let (qd, rqd, single_d) = rows(qdot, "qdot", n, true)?;
+        let (qdd, rqdd, single_dd) = rows(qddot, "qddot", n, true)?;
+        if rq != rqd || rq != rqdd || single != single_d || single != single_dd {
+            return Err(value_error(format!(
+                "`q`, `qdot` and `qddot` must have the same shape, (n,) or (N, {n})"
+            )));
+        }
+        let mut x = Vec::with_capacity(rq * 3 * n);
+        for r in 0..rq {
+            for s in [&q, &qd, &qdd] {
+                x.extend_from_slice(&s[r * n..(r + 1) * n]);
+            }
+        }
+        let net = &self.model;
+        let mut y = vec![0.0; rq * n];
+        py.detach(|| net.predict_batch(&x, &mut y))
+            .map_err(broad_error)?;
+        if single {
+            Ok(vector_out(py, &y, out, "out")?.into_any())
+        } else {
+            Ok(matrix_out(py, (rq, n), |i, j| y[i * n + j], out, "out")?.into_any())
+        }
+    }
+
+    /// Writes the network to `path` (versioned and checksummed; written to a temporary
+    /// file and renamed into place). Loads with `load_network` and
+    /// `admittance_learning::broad::BroadModel::load`.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let net = &self.model;
+        py.detach(|| net.save(&path)).map_err(broad_error)
+    }
+
+    /// Gaussian enhancement nodes.
+    #[getter]
+    fn nodes(&self) -> usize {
+        self.model.n_nodes()
+    }
+
+    /// Inputs per sample (3n: `[q, qdot, qddot]`).
+    #[getter]
+    fn n_inputs(&self) -> usize {
+        self.model.d_in()
+    }
+
+    /// Outputs per sample (n: one torque per joint).
+    #[getter]
+    fn n_outputs(&self) -> usize {
+        self.model.d_out()
+    }
+
+    /// Whether the network has the friction-shaped `tanh(qdot / v)` inputs.
+    #[getter]
+    fn friction_features(&self) -> bool {
+        self.model.friction().count() > 0
+    }
+
+    /// The chosen ridge parameter (absolute).
+    #[getter]
+    fn ridge_lambda(&self) -> f64 {
+        self.model.lambda()
+    }
+
+    /// Per-joint NRMSE on the validation rows (RMSE over the standard deviation of the
+    /// target: 0 perfect, 1 no better than the mean), after training or the last `grow`;
+    /// `None` for a loaded network.
+    #[getter]
+    fn validation_nrmse<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.validation_nrmse
+            .as_ref()
+            .map(|v| PyArray1::from_slice(py, v))
+    }
+
+    /// Training rows behind the network (`None` when it holds no growth state).
+    #[getter]
+    fn samples(&self) -> Option<usize> {
+        self.samples
+    }
+
+    /// Validation rows (`None` for a loaded network).
+    #[getter]
+    fn validation_samples(&self) -> Option<usize> {
+        self.validation_samples
+    }
+
+    /// Wall time of the fit (or of the last `grow`), s; `None` for a loaded network.
+    #[getter]
+    fn seconds(&self) -> Option<f64> {
+        self.seconds
+    }
+
+    /// Whether the network can grow (it holds the training data's Gram matrix).
+    #[getter]
+    fn can_grow(&self) -> bool {
+        self.model.has_growth_state()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Network(nodes={}, inputs={}, outputs={}, friction_features={})",
+            self.model.n_nodes(),
+            self.model.d_in(),
+            self.model.d_out(),
+            self.friction_features()
+        )
+    }
+}
