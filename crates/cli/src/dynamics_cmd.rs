@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use admittance_dynamics::{
     coriolis_matrix, crba, forward_kinematics, gravity_torque, rnea, tip_jacobian, Data,
-    DynamicsError, JointKind, Model,
+    DynamicsError, JointKind, Model, UrdfOptions,
 };
 use clap::Args;
 use serde_json::json;
@@ -19,9 +19,50 @@ pub struct ChainArgs {
     /// Base link (default: the URDF's root link).
     #[arg(long)]
     base: Option<String>,
-    /// Tip link (default: the single leaf link).
+    /// Tip link (default: the arm's hand: the end of the deepest moving joint, past
+    /// gripper fingers; `admittance model` shows what was chosen).
     #[arg(long)]
     tip: Option<String>,
+    /// Refuse physically impossible inertias on the chain instead of loading them with a
+    /// warning.
+    #[arg(long)]
+    strict: bool,
+    /// Hold a joint of a branch off the chain at VALUE (rad or m) instead of 0; repeatable.
+    #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
+    lock: Vec<String>,
+    /// Leave the branch behind JOINT out of the model (its mass too) instead of locking it;
+    /// repeatable.
+    #[arg(long, value_name = "JOINT")]
+    drop: Vec<String>,
+}
+
+impl ChainArgs {
+    /// The loader's options from the flags.
+    fn options(&self) -> Result<UrdfOptions, CliError> {
+        let mut lock = Vec::new();
+        for item in &self.lock {
+            let parsed = item
+                .split_once('=')
+                .and_then(|(j, v)| Some((j.trim(), v.trim().parse::<f64>().ok()?)));
+            match parsed {
+                Some((joint, value)) if !joint.is_empty() && value.is_finite() => {
+                    lock.push((joint.to_string(), value))
+                }
+                _ => {
+                    return Err(CliError::usage(format!(
+                        "--lock {item}: write JOINT=VALUE with a finite VALUE in rad or m, e.g. --lock head_pan=0.3"
+                    )))
+                }
+            }
+        }
+        Ok(UrdfOptions {
+            base: self.base.clone(),
+            tip: self.tip.clone(),
+            strict: self.strict,
+            lock,
+            drop: self.drop.clone(),
+        })
+    }
 }
 
 #[derive(Args)]
@@ -48,13 +89,19 @@ pub struct ModelArgs {
     chain: ChainArgs,
 }
 
+/// Loads the chain the flags describe and prints the loader's warnings on stderr. Any
+/// file that cannot be read or understood (missing, not UTF-8, not a valid URDF) is bad
+/// input (exit 3).
 pub fn load(chain: &ChainArgs) -> Result<Model, CliError> {
-    Model::from_urdf_file(&chain.urdf, chain.base.as_deref(), chain.tip.as_deref()).map_err(|e| {
-        match e {
-            DynamicsError::Io { .. } => CliError::usage(e.to_string()),
-            other => CliError::input(other.to_string()),
-        }
-    })
+    let options = chain.options()?;
+    let model = Model::from_urdf_file_with(&chain.urdf, &options).map_err(|e| match e {
+        DynamicsError::Io { .. } => CliError::input(format!("{e}; check the --urdf path")),
+        other => CliError::input(other.to_string()),
+    })?;
+    for w in model.warnings() {
+        eprintln!("admittance: warning: {w}");
+    }
+    Ok(model)
 }
 
 /// Parses `a,b,c` into exactly `expected` finite numbers.
@@ -135,6 +182,22 @@ pub fn dynamics(args: &DynamicsArgs) -> Result<(), CliError> {
     let rotation: Vec<Vec<f64>> = (0..3)
         .map(|r| tip.rotation.row(r).iter().copied().collect())
         .collect();
+    let results = tau
+        .iter()
+        .chain(gravity.iter())
+        .chain(mass.iter().flatten())
+        .chain(coriolis.iter().flatten())
+        .chain(jacobian.iter().flatten())
+        .chain(tip.translation.iter());
+    if results.into_iter().any(|x| !x.is_finite()) {
+        return Err(CliError::input(format!(
+            "the results overflow: --q, --v, --a or --gravity hold values too large for f64 arithmetic (largest |value| {:e}); use physical values",
+            q.iter()
+                .chain(&v)
+                .chain(&a)
+                .fold(0.0_f64, |m, x| m.max(x.abs()))
+        )));
+    }
     let out = json!({
         "joints": names,
         "tau": tau,
@@ -224,12 +287,40 @@ pub fn model(args: &ModelArgs) -> Result<(), CliError> {
     }
     out.push('\n');
     outln!(out, "total moving mass {:.4} kg", model.total_moving_mass());
-    if !model.excluded_links.is_empty() {
+    for b in model.locked_branches() {
+        let joints: Vec<String> = b.joints.iter().map(|(j, v)| format!("{j}={v}")).collect();
+        let by = b.carried_by.map_or("the base (static)".to_string(), |j| {
+            format!("joint {}", model.joints[j].name)
+        });
         outln!(
             out,
-            "not modelled (hang off the chain through other moving joints): {}",
-            model.excluded_links.join(", ")
+            "locked branch at {}: {:.4} kg carried by {} (held at {}; --lock JOINT=VALUE moves it, --drop {} leaves it out)",
+            b.joint,
+            b.mass,
+            by,
+            joints.join(", "),
+            b.joint
         );
+    }
+    for b in model.dropped_branches() {
+        outln!(
+            out,
+            "dropped branch at {}: {:.4} kg not modelled (links {})",
+            b.joint,
+            b.mass,
+            b.links.join(", ")
+        );
+    }
+    if !model.warnings().is_empty() {
+        out.push('\n');
+        outln!(
+            out,
+            "{} warning(s) (--strict refuses them):",
+            model.warnings().len()
+        );
+        for w in model.warnings() {
+            outln!(out, "  {w}");
+        }
     }
     crate::write_stdout(&out);
     Ok(())

@@ -178,3 +178,128 @@ fn model_summary_lists_joints_limits_and_masses() {
         assert!(stdout.contains(needle), "missing {needle}:\n{stdout}");
     }
 }
+
+/// Issue 14: inputs that overflow the arithmetic are an error naming them, not `null`
+/// with exit 0; a missing and a non-UTF-8 URDF are bad input (exit 3).
+#[test]
+fn overflowing_inputs_and_unreadable_files_are_bad_input() {
+    let (code, stdout, stderr) = admittance(&[
+        "dynamics",
+        "--urdf",
+        "models/baxter_left_arm.urdf",
+        "--q",
+        "0,0,0,0,0,0,0",
+        "--v",
+        "1e200,0,0,0,0,0,0",
+    ]);
+    assert_eq!(code, 3, "{stdout}{stderr}");
+    assert!(stdout.is_empty(), "{stdout}");
+    assert!(
+        stderr.contains("overflow") && stderr.contains("1e200"),
+        "{stderr}"
+    );
+
+    let (code, _, stderr) = admittance(&["model", "--urdf", "missing.urdf"]);
+    assert_eq!(code, 3, "{stderr}");
+    assert!(stderr.contains("missing.urdf"), "{stderr}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let latin1 = dir.path().join("latin1.urdf");
+    std::fs::write(&latin1, b"<robot name=\"caf\xe9\"/>").unwrap();
+    let (code, _, stderr) = admittance(&["model", "--urdf", latin1.to_str().unwrap()]);
+    assert_eq!(code, 3, "{stderr}");
+    assert!(
+        stderr.contains("UTF-8") && stderr.contains("latin1.urdf"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+}
+
+/// A small arm with a two-finger gripper, a camera branch and a questionable inertia.
+const GRIPPER_ARM: &str = r#"<robot name="gripper_arm">
+  <link name="base"/>
+  <link name="link1"><inertial><origin xyz="0 0 0.1"/><mass value="2"/>
+    <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.01"/></inertial></link>
+  <link name="link2"><inertial><origin xyz="0.1 0 0"/><mass value="1"/>
+    <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.5"/></inertial></link>
+  <link name="hand"><inertial><mass value="0"/>
+    <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <link name="finger"><inertial><mass value="0.05"/>
+    <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <link name="camera"><inertial><mass value="0.3"/>
+    <inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/>
+    <axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="40" velocity="2"/></joint>
+  <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="20" velocity="2"/></joint>
+  <joint name="hand_joint" type="fixed"><parent link="link2"/><child link="hand"/>
+    <origin xyz="0.3 0 0"/></joint>
+  <joint name="finger_joint" type="prismatic"><parent link="hand"/><child link="finger"/>
+    <axis xyz="0 0 1"/><limit lower="0" upper="0.04" effort="10" velocity="0.1"/></joint>
+  <joint name="cam_pan" type="revolute"><parent link="base"/><child link="camera"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>
+"#;
+
+/// Issue 13: a description with a gripper, a branch and an impossible inertia loads; the
+/// model lists the locked branches with their mass and the warning, `--strict` refuses
+/// it, `--drop` and `--lock` act, and `dynamics` prints the warning on stderr.
+#[test]
+fn model_lists_branches_and_warnings_and_the_options_act() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("gripper_arm.urdf");
+    std::fs::write(&urdf, GRIPPER_ARM).unwrap();
+    let urdf = urdf.to_str().unwrap();
+    let (code, stdout, stderr) = admittance(&["model", "--urdf", urdf]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("base -> hand (2 moving joints)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("locked branch at finger_joint: 0.0500 kg"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("locked branch at cam_pan: 0.3000 kg"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("1 warning(s)") && stdout.contains("link2"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("warning") && stderr.contains("link2"),
+        "{stderr}"
+    );
+
+    let (code, _, stderr) = admittance(&["model", "--urdf", urdf, "--strict"]);
+    assert_eq!(code, 3, "{stderr}");
+    assert!(stderr.contains("link2"), "{stderr}");
+
+    let (code, stdout, stderr) = admittance(&["model", "--urdf", urdf, "--drop", "cam_pan"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("dropped branch at cam_pan: 0.3000 kg"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("locked branch at cam_pan"), "{stdout}");
+
+    let (code, _, stderr) = admittance(&["model", "--urdf", urdf, "--lock", "nope=0.1"]);
+    assert_eq!(code, 3, "{stderr}");
+    assert!(stderr.contains("nope"), "{stderr}");
+
+    // The finger's lock position moves its mass: the gravity torque of j2 changes.
+    let gravity = |extra: &[&str]| -> f64 {
+        let mut args = vec!["dynamics", "--urdf", urdf, "--q", "0,0.5"];
+        args.extend_from_slice(extra);
+        let (code, stdout, stderr) = admittance(&args);
+        assert_eq!(code, 0, "{stderr}");
+        assert!(stderr.contains("warning"), "{stderr}");
+        let v: Value = serde_json::from_str(&stdout).unwrap();
+        v["gravity"][1].as_f64().unwrap()
+    };
+    let held_open = gravity(&["--lock", "finger_joint=0.04"]);
+    let closed = gravity(&[]);
+    assert!((held_open - closed).abs() > 1e-9, "{held_open} {closed}");
+}

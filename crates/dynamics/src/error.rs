@@ -31,6 +31,45 @@ impl fmt::Display for UrdfError {
 
 impl std::error::Error for UrdfError {}
 
+/// Something questionable in a URDF that the loader accepted (e.g. an inertia no rigid
+/// body can have): carried by the [`crate::Model`] (see [`crate::Model::warnings`]) so that
+/// every tool can print it. `strict` loading turns these into errors.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoadWarning {
+    /// The file (or the source name given to [`crate::Model::from_urdf_str`]).
+    pub file: String,
+    /// 1-based line of the element, when known.
+    pub line: Option<u32>,
+    /// The element, e.g. `link 'panda_link3' <inertial> <inertia>`.
+    pub element: String,
+    /// What is questionable and what the loader did about it.
+    pub problem: String,
+}
+
+impl fmt::Display for LoadWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(line) => write!(
+                f,
+                "{}:{}: {}: {}",
+                self.file, line, self.element, self.problem
+            ),
+            None => write!(f, "{}: {}: {}", self.file, self.element, self.problem),
+        }
+    }
+}
+
+impl From<UrdfError> for LoadWarning {
+    fn from(e: UrdfError) -> Self {
+        Self {
+            file: e.file,
+            line: e.line,
+            element: e.element,
+            problem: e.problem,
+        }
+    }
+}
+
 /// An argument of a dynamics call has the wrong length.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DimensionError {

@@ -20,6 +20,12 @@
 //! let m = crba(&model, &mut data, &q).unwrap();
 //! assert!(m[(0, 0)] > 0.0 && tau.iter().all(|t| t.is_finite()));
 //! ```
+//!
+//! Real descriptions carry more than the arm: grippers, heads, other arms. They load:
+//! branches off the chain are carried locked (see [`UrdfOptions`] and
+//! [`Model::from_urdf_file_with`]), and what the loader accepted with a warning is in
+//! [`Model::warnings`].
+#![warn(missing_docs)]
 
 pub mod algorithms;
 mod data;
@@ -40,19 +46,23 @@ pub use algorithms::rnea::{
     gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea, rnea_with_tip_wrench,
 };
 pub use data::Data;
-pub use error::{DimensionError, DynamicsError, UrdfError};
-pub use model::{Frame, Joint, JointKind, JointLimits, LinkMass, Model, Payload};
+pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
+pub use model::{
+    DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,
+};
 pub use spatial::{Force, Inertia, Motion, Transform};
+pub use urdf::UrdfOptions;
 
 impl Model {
     /// Loads the chain between `base` (default: the root link) and `tip` (default: the
-    /// single leaf link) from a URDF file.
+    /// arm's hand, see [`Model::from_urdf_file_with`]) from a URDF file, with the default
+    /// [`UrdfOptions`].
     pub fn from_urdf_file(
         path: &std::path::Path,
         base: Option<&str>,
         tip: Option<&str>,
     ) -> Result<Model, DynamicsError> {
-        urdf::load_file(path, base, tip)
+        urdf::load_file(path, &UrdfOptions::chain(base, tip))
     }
 
     /// Loads the chain from URDF text; `source` names the text in error messages.
@@ -62,6 +72,36 @@ impl Model {
         base: Option<&str>,
         tip: Option<&str>,
     ) -> Result<Model, DynamicsError> {
-        urdf::load_str(text, source, base, tip)
+        urdf::load_str(text, source, &UrdfOptions::chain(base, tip))
+    }
+
+    /// Loads a model from a URDF file as `options` say.
+    ///
+    /// The **default tip** (when `options.tip` is `None`) is the arm's hand, found from the
+    /// tree alone:
+    /// 1. *end-effector joints* are set aside: mimic joints, joints a mimic joint follows,
+    ///    and joints whose name contains `finger`, `gripper`, `jaw`, `thumb`, `knuckle` or
+    ///    `hand` (any case), with their subtrees (unless that leaves no moving joint);
+    /// 2. the *hand joint* is the moving joint of greatest depth (counted in moving joints
+    ///    from the base); several at the greatest depth (two arms, four legs) is an error
+    ///    listing the candidate tips;
+    /// 3. the tip is the link behind the most fixed joints on the hand joint's body (a
+    ///    TCP frame behind a flange), or the hand joint's child link when several tie.
+    ///
+    /// On a serial chain without end-effector joints this is its single leaf.
+    pub fn from_urdf_file_with(
+        path: &std::path::Path,
+        options: &UrdfOptions,
+    ) -> Result<Model, DynamicsError> {
+        urdf::load_file(path, options)
+    }
+
+    /// Loads a model from URDF text as `options` say; `source` names the text in errors.
+    pub fn from_urdf_str_with(
+        text: &str,
+        source: &str,
+        options: &UrdfOptions,
+    ) -> Result<Model, DynamicsError> {
+        urdf::load_str(text, source, options)
     }
 }

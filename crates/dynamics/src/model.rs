@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::error::DynamicsError;
+use crate::error::{DynamicsError, LoadWarning};
 use crate::spatial::{axis_angle, Inertia, Motion, Transform};
 
 /// The kinds of moving joint the chain supports. Fixed joints are folded away at load
@@ -160,6 +160,37 @@ pub struct LinkMass {
     pub joint: Option<usize>,
 }
 
+/// A moving branch of the URDF off the chain (a gripper's fingers, a head, another arm)
+/// that the model carries rigidly, its joints held at fixed positions: Pinocchio's
+/// reduced model (`buildReducedModel` with those joints locked).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LockedBranch {
+    /// The joint where the branch leaves the chain (or the base): the first moving joint
+    /// off it.
+    pub joint: String,
+    /// Every joint of the branch that can move, in file order within the branch's tree
+    /// walk, with the position it is held at (rad or m; floating and planar joints are
+    /// held at the identity and listed with 0).
+    pub joints: Vec<(String, f64)>,
+    /// Mass of the links of the branch (kg), dropped sub-branches excluded.
+    pub mass: f64,
+    /// The moving joint whose body carries the branch; `None` when it hangs off the fixed
+    /// base (its mass then affects nothing).
+    pub carried_by: Option<usize>,
+}
+
+/// A branch of the URDF left out of the model on request (its mass is not carried).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DroppedBranch {
+    /// The joint whose subtree was removed.
+    pub joint: String,
+    /// The links removed with it.
+    pub links: Vec<String>,
+    /// Their mass (kg), as far as the file states it readably (the dropped part is not
+    /// validated).
+    pub mass: f64,
+}
+
 /// A rigid payload attached at the tip frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Payload {
@@ -204,9 +235,12 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// Masses of the chain's links, for summaries.
     pub link_masses: Vec<LinkMass>,
-    /// Links of the URDF that hang off the chain through moving joints not on the chain
-    /// and are therefore not part of this model (their mass is ignored).
+    /// Links of the URDF left out of this model: the links of the dropped branches
+    /// ([`Model::dropped_branches`]); their mass is ignored.
     pub excluded_links: Vec<String>,
+    pub(crate) warnings: Vec<LoadWarning>,
+    pub(crate) locked_branches: Vec<LockedBranch>,
+    pub(crate) dropped_branches: Vec<DroppedBranch>,
 }
 
 impl Model {
@@ -219,6 +253,22 @@ impl Model {
     /// Joint names in chain order.
     pub fn joint_names(&self) -> impl Iterator<Item = &str> {
         self.joints.iter().map(|j| j.name.as_str())
+    }
+
+    /// What the loader accepted with a warning (e.g. physically impossible inertias on
+    /// the chain); empty for a clean file.
+    pub fn warnings(&self) -> &[LoadWarning] {
+        &self.warnings
+    }
+
+    /// The moving branches off the chain that the model carries locked, with their mass.
+    pub fn locked_branches(&self) -> &[LockedBranch] {
+        &self.locked_branches
+    }
+
+    /// The branches left out of the model on request, with their mass.
+    pub fn dropped_branches(&self) -> &[DroppedBranch] {
+        &self.dropped_branches
     }
 
     /// Index of a moving joint by name.
@@ -271,6 +321,11 @@ impl Model {
         for lm in &mut out.link_masses {
             if let Some(j) = lm.joint {
                 lm.mass *= scales[j];
+            }
+        }
+        for branch in &mut out.locked_branches {
+            if let Some(j) = branch.carried_by {
+                branch.mass *= scales[j];
             }
         }
         Ok(out)
