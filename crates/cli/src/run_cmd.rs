@@ -115,6 +115,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             message: io.to_string(),
         },
     })?;
+    if let Some(warnings) = summary.json.get("warnings").and_then(|w| w.as_array()) {
+        for w in warnings.iter().filter_map(|w| w.as_str()) {
+            eprintln!("admittance: warning: {w}");
+        }
+    }
     if !summary.failures.is_empty() {
         if args.json {
             crate::write_stdout(&format!(

@@ -59,21 +59,45 @@ impl PyModel {
 #[pymethods]
 impl PyModel {
     /// Loads the chain between `base` (default: the URDF's root link) and `tip` (default:
-    /// the single leaf link) from a URDF file. Revolute, continuous, prismatic and fixed
-    /// joints; fixed joints fold their child's inertia into the moving body. A bad file is a
-    /// `ValueError` naming the file, line and element; a missing one an `OSError`.
+    /// the arm's hand, past gripper fingers) from a URDF file, as `admittance model` does.
+    /// Revolute, continuous, prismatic and fixed joints; fixed joints fold their child's
+    /// inertia into the moving body; moving branches off the chain are held at 0 (or at
+    /// `lock={"joint": value}`) with their mass kept, or left out (`drop=["joint"]`).
+    /// Physically impossible inertias load with a warning (`warnings`) unless `strict`. A
+    /// bad file is a `ValueError` naming the file, line and element; a missing one an
+    /// `OSError`.
     #[staticmethod]
-    #[pyo3(signature = (path, base=None, tip=None))]
+    #[pyo3(signature = (path, base=None, tip=None, *, strict=false, lock=None, drop=None))]
     fn from_urdf(
         py: Python<'_>,
         path: PathBuf,
         base: Option<String>,
         tip: Option<String>,
+        strict: bool,
+        lock: Option<std::collections::BTreeMap<String, f64>>,
+        drop: Option<Vec<String>>,
     ) -> PyResult<Self> {
+        let options = admittance_dynamics::UrdfOptions {
+            base,
+            tip,
+            strict,
+            lock: lock.unwrap_or_default().into_iter().collect(),
+            drop: drop.unwrap_or_default(),
+        };
         let model = py
-            .detach(|| Model::from_urdf_file(&path, base.as_deref(), tip.as_deref()))
+            .detach(|| Model::from_urdf_file_with(&path, &options))
             .map_err(dynamics_error)?;
         Ok(PyModel::new(model))
+    }
+
+    /// What the loader accepted with a warning (`file:line: element: problem`).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.model
+            .warnings()
+            .iter()
+            .map(|w| w.to_string())
+            .collect()
     }
 
     /// Loads the chain from URDF text (`source` names the text in error messages).

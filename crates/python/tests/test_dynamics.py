@@ -165,3 +165,18 @@ def test_urdf_errors(tmp_path):
     assert m.n == 7
     with pytest.raises(ValueError, match="scale"):
         m.with_scaled_inertias(-1.0)
+
+
+def test_load_options_and_warnings(tmp_path):
+    from conftest import BAXTER
+
+    text = BAXTER.read_text().replace('ixx="0.00017588"', 'ixx="0.5"')
+    broken = tmp_path / "arm.urdf"
+    broken.write_text(text)
+    m = adm.Model.from_urdf(broken, tip="left_hand")
+    assert len(m.warnings) == 1 and "left_hand" in m.warnings[0]
+    with pytest.raises(ValueError, match="left_hand"):
+        adm.Model.from_urdf(broken, tip="left_hand", strict=True)
+    with pytest.raises(ValueError, match="head_pan"):
+        adm.Model.from_urdf(BAXTER, drop=["head_pan"])
+    assert adm.Model.from_urdf(BAXTER).warnings == []

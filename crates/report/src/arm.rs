@@ -32,5 +32,36 @@ pub fn load_arm(folder: &RunFolder, scenario_dir: Option<&Path>) -> Result<Model
                 .join(" or ")
         )
     })?;
-    Model::from_urdf_file(found, text("arm.base"), text("arm.tip")).map_err(|e| e.to_string())
+    let lock = folder
+        .scenario_value("arm.lock")
+        .and_then(toml::Value::as_table)
+        .map(|t| {
+            t.iter()
+                .filter_map(|(j, v)| {
+                    Some((
+                        j.clone(),
+                        v.as_float().or(v.as_integer().map(|i| i as f64))?,
+                    ))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let drop = folder
+        .scenario_value("arm.drop")
+        .and_then(toml::Value::as_array)
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    let options = admittance_dynamics::UrdfOptions {
+        base: text("arm.base").map(String::from),
+        tip: text("arm.tip").map(String::from),
+        // The run loaded it; its warnings are in summary.json already.
+        strict: false,
+        lock,
+        drop,
+    };
+    Model::from_urdf_file_with(found, &options).map_err(|e| e.to_string())
 }

@@ -39,6 +39,8 @@ pub(crate) struct Assembly {
     pub oracle_admittance: Option<Compliance>,
     pub observer_training: Option<ObserverTrainingMetrics>,
     pub observer_validation: Option<TimeSeries>,
+    /// What the URDF loader accepted with a warning (`file:line: element: problem`).
+    pub arm_warnings: Vec<String>,
 }
 
 /// Resolves, validates and builds one variant of a scenario.
@@ -52,12 +54,7 @@ pub(crate) fn assemble(
     let ctx = Ctx { source, variant };
     let scenario: Scenario = source.resolve(variant)?;
     let urdf = scenario.urdf_path(path);
-    let model = Model::from_urdf_file(
-        &urdf,
-        scenario.arm.base.as_deref(),
-        scenario.arm.tip.as_deref(),
-    )
-    .map_err(|e| {
+    let model = Model::from_urdf_file_with(&urdf, &scenario.arm.urdf_options()).map_err(|e| {
         ctx.err(
             "arm.urdf",
             e.to_string(),
@@ -169,6 +166,7 @@ pub(crate) fn assemble(
         oracle_admittance,
         observer_training,
         observer_validation,
+        arm_warnings: model.warnings().iter().map(|w| w.to_string()).collect(),
     })
 }
 

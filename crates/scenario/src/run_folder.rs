@@ -312,6 +312,16 @@ fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
         summary::KEY_VARIANT_ORDER.into(),
         json!(runs.iter().map(|r| r.name.clone()).collect::<Vec<_>>()),
     );
+    // The arm's load warnings, once each (variants may load the same arm).
+    let mut warnings: Vec<&String> = Vec::new();
+    for w in runs.iter().flat_map(|r| &r.arm_warnings) {
+        if !warnings.contains(&w) {
+            warnings.push(w);
+        }
+    }
+    if !warnings.is_empty() {
+        out.insert(summary::KEY_WARNINGS.into(), json!(warnings));
+    }
     Value::Object(out)
 }
 

@@ -42,6 +42,8 @@ pub struct VariantRun {
     pub observer_validation: Option<TimeSeries>,
     /// Why and when the variant stopped early, if it did.
     pub divergence: Option<Divergence>,
+    /// What the URDF loader accepted with a warning (`file:line: element: problem`).
+    pub arm_warnings: Vec<String>,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -76,6 +78,7 @@ fn simulate_variant(
         mut oracle_admittance,
         observer_training,
         observer_validation,
+        arm_warnings,
     } = parts;
     let n = joints.len();
     let dt = closed_loop.dt();
@@ -201,7 +204,7 @@ fn simulate_variant(
         }
     }
     options.report(variant_name, Stage::Simulate, steps as u64, steps as u64);
-    finish(
+    let mut run = finish(
         variant_name,
         closed_loop,
         gather,
@@ -211,7 +214,9 @@ fn simulate_variant(
         oracle_admittance.is_some(),
         observer_training,
         observer_validation,
-    )
+    )?;
+    run.arm_warnings = arm_warnings;
+    Ok(run)
 }
 
 /// Everything gathered, as a [`VariantRun`].
@@ -254,5 +259,6 @@ fn finish(
         node_weights,
         observer_validation,
         divergence: health.divergence,
+        arm_warnings: Vec::new(),
     })
 }

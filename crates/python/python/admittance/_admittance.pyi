@@ -32,10 +32,23 @@ class Model:
     """
 
     @staticmethod
-    def from_urdf(path: StrPath, base: Optional[str] = None, tip: Optional[str] = None) -> "Model":
+    def from_urdf(
+        path: StrPath,
+        base: Optional[str] = None,
+        tip: Optional[str] = None,
+        *,
+        strict: bool = False,
+        lock: Optional[Mapping[str, float]] = None,
+        drop: Optional[Sequence[str]] = None,
+    ) -> "Model":
         """Loads the chain between ``base`` (default: the root link) and ``tip`` (default: the
-        single leaf link). A bad file is a ``ValueError`` naming the file, line and element; a
-        missing one an ``OSError``."""
+        arm's hand, past gripper fingers). Branches off the chain are held at 0 (or ``lock``)
+        with their mass, or left out (``drop``); impossible inertias load with a warning
+        (``warnings``) unless ``strict``. A bad file is a ``ValueError`` naming the file, line
+        and element; a missing one an ``OSError``."""
+    @property
+    def warnings(self) -> list[str]:
+        """What the loader accepted with a warning (``file:line: element: problem``)."""
     @staticmethod
     def from_urdf_string(
         text: str, base: Optional[str] = None, tip: Optional[str] = None, source: str = "<string>"

@@ -52,9 +52,33 @@ pub struct ArmSpec {
     /// Base link (default: the root link).
     #[serde(default)]
     pub base: Option<String>,
-    /// Tip link (default: the single leaf).
+    /// Tip link (default: the arm's hand, the loader's rule: `admittance model` shows it).
     #[serde(default)]
     pub tip: Option<String>,
+    /// Refuse physically impossible inertias on the chain (default: load them with a
+    /// warning, which the run prints and `summary.json` lists).
+    #[serde(default)]
+    pub strict: bool,
+    /// Positions (rad or m) at which joints of branches off the chain are held (a gripper's
+    /// opening); the others are held at 0: `[arm.lock] finger_joint1 = 0.04`.
+    #[serde(default)]
+    pub lock: std::collections::BTreeMap<String, f64>,
+    /// Joints whose branch is left out of the model, mass and all, instead of locked.
+    #[serde(default)]
+    pub drop: Vec<String>,
+}
+
+impl ArmSpec {
+    /// The loader's options for this arm.
+    pub fn urdf_options(&self) -> admittance_dynamics::UrdfOptions {
+        admittance_dynamics::UrdfOptions {
+            base: self.base.clone(),
+            tip: self.tip.clone(),
+            strict: self.strict,
+            lock: self.lock.iter().map(|(j, v)| (j.clone(), *v)).collect(),
+            drop: self.drop.clone(),
+        }
+    }
 }
 
 /// One sinusoidal component `amplitude * sin(2 pi t / period + phase)` on a joint.
