@@ -258,3 +258,35 @@ fn an_observer_network_that_cannot_fit_is_refused_before_its_data_are_simulated(
     );
     assert!(!out.exists());
 }
+
+/// Issue 14: a NaN sensor fault over the first 0.5 s used to leave the observer's input
+/// filter NaN for the whole run (`observer_faults` = every step); it must stop counting
+/// when the fault ends.
+#[test]
+fn the_observer_recovers_after_a_nan_fault_at_start_up() {
+    let tmp = tempdir();
+    let out = tmp.path().join("run");
+    let scenario = root().join("scenarios/admittance.toml");
+    let (code, err) = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        "duration=2",
+        "--set",
+        "evaluation_start=1",
+        "--set",
+        r#"plant.sensors.faults=[{kind="nan", t_start=0.0, t_end=0.5}]"#,
+        "--out",
+        out.to_str().unwrap(),
+        "--no-recording",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let m = &summary["variants"]["momentum"];
+    assert_eq!(m["steps"], 2000, "{m}");
+    // 500 control periods of NaN at 1 kHz, and none after.
+    assert_eq!(m["observer_faults"], 500, "{m}");
+}

@@ -18,6 +18,12 @@
 //! ```
 //!
 //! (zero derivatives until there are enough samples, as in [`crate::Sensors`]).
+//!
+//! Invalid samples (NaN or infinite) never enter the filters: a channel that receives one
+//! holds its last outputs, and its filter restarts at the next valid sample (steady state at
+//! that value, derivatives from zero), so a burst of bad data costs the observer only the
+//! burst. A channel that has had no valid sample yet outputs NaN (nothing to hold), which
+//! the observers report as a fault.
 
 use crate::plant::error::SimError;
 use crate::sensors::LowPass;
@@ -28,7 +34,12 @@ pub struct InputConditioner {
     q_filter: LowPass,
     tau_filter: LowPass,
     dt: f64,
-    samples: usize,
+    /// Per joint: valid angle samples since the filter (re)started, up to 2.
+    valid: Vec<u8>,
+    /// Per joint: the angle (resp. torque) channel has had an invalid sample since its
+    /// last valid one, and its filter must restart.
+    q_lost: Vec<bool>,
+    tau_lost: Vec<bool>,
     /// Conditioned angles.
     pub q: Vec<f64>,
     /// Their backward difference.
@@ -49,40 +60,67 @@ impl InputConditioner {
             q_filter: LowPass::butterworth2(cutoff_hz, sample_rate_hz, n)?,
             tau_filter: LowPass::butterworth2(cutoff_hz, sample_rate_hz, n)?,
             dt: 1.0 / sample_rate_hz,
-            samples: 0,
-            q: vec![0.0; n],
+            valid: vec![0; n],
+            q_lost: vec![false; n],
+            tau_lost: vec![false; n],
+            // NaN until a channel's first valid sample: nothing to hold before it.
+            q: vec![f64::NAN; n],
             qdot: vec![0.0; n],
             qddot: vec![0.0; n],
-            tau: vec![0.0; n],
+            tau: vec![f64::NAN; n],
             q_prev: vec![0.0; n],
             qdot_prev: vec![0.0; n],
         })
     }
 
     /// Takes one sample of angles and torques (each `n` long; extra values are ignored,
-    /// missing ones leave their channels unchanged).
+    /// missing ones leave their channels unchanged). Non-finite values are skipped (see the
+    /// module documentation).
     pub fn update(&mut self, q: &[f64], tau: &[f64]) {
         let n = self.q.len().min(q.len()).min(tau.len());
         for i in 0..n {
-            let qf = self.q_filter.update(i, q[i]);
-            let v = if self.samples >= 1 {
-                (qf - self.q_prev[i]) / self.dt
+            self.update_angle(i, q[i]);
+            if tau[i].is_finite() {
+                if self.tau_lost[i] {
+                    self.tau_filter.restart(i);
+                    self.tau_lost[i] = false;
+                }
+                self.tau[i] = self.tau_filter.update(i, tau[i]);
             } else {
-                0.0
-            };
-            let a = if self.samples >= 2 {
-                (v - self.qdot_prev[i]) / self.dt
-            } else {
-                0.0
-            };
-            self.q[i] = qf;
-            self.qdot[i] = v;
-            self.qddot[i] = a;
-            self.q_prev[i] = qf;
-            self.qdot_prev[i] = v;
-            self.tau[i] = self.tau_filter.update(i, tau[i]);
+                // Hold the last output (NaN when there has been none).
+                self.tau_lost[i] = true;
+            }
         }
-        self.samples = self.samples.saturating_add(1);
+    }
+
+    fn update_angle(&mut self, i: usize, q: f64) {
+        if !q.is_finite() {
+            // Hold the last outputs (NaN when there has been none).
+            self.q_lost[i] = true;
+            return;
+        }
+        if self.q_lost[i] {
+            self.q_filter.restart(i);
+            self.valid[i] = 0;
+            self.q_lost[i] = false;
+        }
+        let qf = self.q_filter.update(i, q);
+        let v = if self.valid[i] >= 1 {
+            (qf - self.q_prev[i]) / self.dt
+        } else {
+            0.0
+        };
+        let a = if self.valid[i] >= 2 {
+            (v - self.qdot_prev[i]) / self.dt
+        } else {
+            0.0
+        };
+        self.q[i] = qf;
+        self.qdot[i] = v;
+        self.qddot[i] = a;
+        self.q_prev[i] = qf;
+        self.qdot_prev[i] = v;
+        self.valid[i] = (self.valid[i] + 1).min(2);
     }
 }
 
@@ -120,6 +158,40 @@ mod tests {
         assert!(err_acc < 5e-3, "acceleration error {err_acc}");
         // The torque is one sample ahead of the acceleration (no second difference).
         assert!(err_pair < 1e-2, "pairing error {err_pair}");
+    }
+
+    /// Issue 14: NaN samples at start-up (a sensor fault over 0-0.5 s) used to enter the
+    /// filter state and keep every output NaN for the rest of the run.
+    #[test]
+    fn channels_restart_after_invalid_samples() {
+        let fs = 1000.0;
+        let mut c = InputConditioner::new(2, 10.0, fs).unwrap();
+        for k in 0..500 {
+            let t = k as f64 / fs;
+            c.update(&[f64::NAN, 0.3 + 0.1 * t], &[f64::NAN, 1.0]);
+            assert!(c.q[0].is_nan(), "no valid angle yet: nothing to hold");
+            assert!(c.q[1].is_finite() && c.tau[1].is_finite());
+        }
+        for k in 500..1000 {
+            let t = k as f64 / fs;
+            c.update(&[0.5 + 0.2 * t, 0.3 + 0.1 * t], &[2.0, 1.0]);
+        }
+        // Restarted at steady state: the ramp's slope comes through (less the filter's lag,
+        // which a ramp does not change in slope).
+        assert!((c.qdot[0] - 0.2).abs() < 1e-6, "qdot {}", c.qdot[0]);
+        assert!(c.qddot[0].abs() < 1e-6, "qddot {}", c.qddot[0]);
+        assert!((c.tau[0] - 2.0).abs() < 1e-12, "tau {}", c.tau[0]);
+        // A NaN burst later: outputs held, then a clean restart.
+        let held = (c.q[0], c.qdot[0], c.tau[0]);
+        for _ in 0..10 {
+            c.update(&[f64::INFINITY, 0.4], &[f64::NAN, 1.0]);
+            assert_eq!((c.q[0], c.qdot[0], c.tau[0]), held);
+        }
+        for _ in 0..2000 {
+            c.update(&[1.0, 0.4], &[3.0, 1.0]);
+        }
+        assert!((c.q[0] - 1.0).abs() < 1e-12 && c.qdot[0].abs() < 1e-9);
+        assert!((c.tau[0] - 3.0).abs() < 1e-12);
     }
 
     #[test]

@@ -259,6 +259,13 @@ impl LowPass {
         self.started.fill(false);
     }
 
+    /// Forgets the history of channel `ch`: its next sample starts it at steady state.
+    pub fn restart(&mut self, ch: usize) {
+        if let Some(s) = self.started.get_mut(ch) {
+            *s = false;
+        }
+    }
+
     /// Numerator `[b0, b1, b2]` and denominator `[a1, a2]` (with `a0 = 1`).
     pub fn coefficients(&self) -> ([f64; 3], [f64; 2]) {
         (self.b, self.a)
