@@ -290,3 +290,36 @@ fn the_observer_recovers_after_a_nan_fault_at_start_up() {
     // 500 control periods of NaN at 1 kHz, and none after.
     assert_eq!(m["observer_faults"], 500, "{m}");
 }
+
+/// Issue 14: one joint's encoder frozen for 1 s gave `faults` 0; it is detected, held safe
+/// and counted as `stale_measurements`.
+#[test]
+fn a_frozen_joint_is_detected_and_counted() {
+    let tmp = tempdir();
+    let out = tmp.path().join("run");
+    let scenario = root().join("scenarios/admittance.toml");
+    let (code, err) = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        "duration=7",
+        "--set",
+        "evaluation_start=1",
+        "--set",
+        r#"plant.sensors.faults=[{kind="stale", joints=["left_s0"], t_start=5.0, t_end=6.0}]"#,
+        "--out",
+        out.to_str().unwrap(),
+        "--no-recording",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+            .unwrap();
+    let m = &summary["variants"]["momentum"];
+    let stale = m["stale_measurements"].as_u64().unwrap();
+    // s0 moves at 0.45-0.52 rad/s over 5-6 s: all but the first 4 of 1000 frozen samples.
+    assert!((900..=1000).contains(&stale), "{m}");
+    assert_eq!(m["faults"].as_u64().unwrap(), stale, "{m}");
+}

@@ -58,10 +58,13 @@ pub enum Fault {
         /// First offending joint.
         joint: usize,
     },
-    /// The position vector has been bit-identical for `steps` consecutive steps while motion
-    /// was expected (see [`crate::SafeHoldConfig::stale_steps`]).
+    /// A joint's measured position has been bit-identical for `steps` consecutive steps
+    /// while that joint was expected to move (see [`crate::SafeHoldConfig::stale_steps`]):
+    /// a frozen encoder or dropped samples.
     StaleMeasurement {
-        /// Consecutive identical samples seen.
+        /// The first stale joint (chain order).
+        joint: usize,
+        /// Consecutive identical samples seen on it.
         steps: u32,
     },
     /// A reference (`q_ref`, `qdot_ref`, `qddot_ref`, or the desired trajectory of the
@@ -106,10 +109,10 @@ impl fmt::Display for Fault {
             Fault::NonFiniteMeasurement { argument, joint } => {
                 write!(f, "measured `{argument}` is not finite at joint {joint}")
             }
-            Fault::StaleMeasurement { steps } => {
+            Fault::StaleMeasurement { joint, steps } => {
                 write!(
                     f,
-                    "measured `q` unchanged for {steps} steps while motion is expected"
+                    "measured `q` of joint {joint} unchanged for {steps} steps while it is expected to move"
                 )
             }
             Fault::NonFiniteReference { argument, joint } => {

@@ -14,10 +14,10 @@ fn default_damping() -> JointValues {
     JointValues::Uniform(0.5)
 }
 fn default_stale_steps() -> u32 {
-    50
+    5
 }
 fn default_stale_velocity() -> f64 {
-    0.05
+    0.2
 }
 fn yes() -> bool {
     true
@@ -33,15 +33,16 @@ pub struct SafeHoldConfig {
     /// 1 kHz).
     #[serde(default = "default_damping")]
     pub damping: JointValues,
-    /// `N`: a measurement is stale when the position vector `q` has been bit-identical to
-    /// the previous sample for `N` consecutive steps while motion is expected. Zero disables
-    /// the check. Default 50.
+    /// `N`: a joint's measurement is stale when its position has been bit-identical to the
+    /// previous sample for `N` consecutive steps while that joint is expected to move. Zero
+    /// disables the check. Default 5 (a 10 ms dropout at 1 kHz is caught).
     #[serde(default = "default_stale_steps")]
     pub stale_steps: u32,
-    /// Motion is expected when `max_i |q_ref'_i|` or `max_i |qdot_i|` (measured) exceeds
-    /// this speed (rad/s); default 0.05. Choose `N` and this speed so that
+    /// Joint `i` is expected to move when `|q_ref'_i|` or its measured `|qdot_i|` exceeds
+    /// this speed (rad/s); default 0.2. Choose `N` and this speed so that
     /// `stale_velocity * N * dt` is well above the encoder quantisation: a slowly moving
-    /// joint legitimately repeats its quantised angle for a few steps.
+    /// joint legitimately repeats its quantised angle for a few steps (defaults: 1e-3 rad
+    /// in 5 steps at 1 kHz, ten counts of a 16-bit encoder).
     #[serde(default = "default_stale_velocity")]
     pub stale_velocity: f64,
     /// Whether the hold includes the nominal gravity `G_nominal(q_hold)`; default true. Turn
@@ -84,10 +85,11 @@ impl Default for SafeHoldConfig {
 /// non-finite `q`; stale `q`; non-finite `qdot`; non-finite references; non-finite
 /// estimate. [`finish`](SafeHold::finish) adds non-finite law outputs.
 ///
-/// **Staleness**: each step whose finite `q` is bit-identical to the previous sample while
-/// motion is expected (see [`SafeHoldConfig::stale_velocity`]) increments a counter; any
-/// change, or no expected motion, resets it. The fault is raised while the counter is at
-/// least `N` ([`SafeHoldConfig::stale_steps`]) and ends at the first changed sample.
+/// **Staleness**, per joint: each step whose finite `q_i` is bit-identical to the previous
+/// sample while joint `i` is expected to move (see [`SafeHoldConfig::stale_velocity`])
+/// increments the joint's counter; any change, or no expected motion, resets it. The fault
+/// names the first joint whose counter is at least `N` ([`SafeHoldConfig::stale_steps`]) and
+/// ends at its first changed sample.
 #[derive(Clone, Debug)]
 pub struct SafeHold {
     model: Arc<Model>,
@@ -101,7 +103,8 @@ pub struct SafeHold {
     has_hold: bool,
     last_q: Vec<f64>,
     has_last_q: bool,
-    identical: u32,
+    /// Per joint: consecutive identical samples while motion was expected.
+    identical: Vec<u32>,
     faults: u64,
     last_fault: Option<Fault>,
 }
@@ -126,7 +129,7 @@ impl SafeHold {
             has_hold: false,
             last_q: vec![0.0; n],
             has_last_q: false,
-            identical: 0,
+            identical: vec![0; n],
             faults: 0,
             last_fault: None,
         })
@@ -166,7 +169,7 @@ impl SafeHold {
     pub fn reset(&mut self) {
         self.has_hold = false;
         self.has_last_q = false;
-        self.identical = 0;
+        self.identical.fill(0);
         self.faults = 0;
         self.last_fault = None;
     }
@@ -206,10 +209,13 @@ impl SafeHold {
             });
         }
         self.update_staleness(input.q, input.qdot, input.qdot_ref);
-        if self.stale_steps > 0 && self.identical >= self.stale_steps {
-            return Err(Fault::StaleMeasurement {
-                steps: self.identical,
-            });
+        if self.stale_steps > 0 {
+            if let Some(joint) = self.identical.iter().position(|&c| c >= self.stale_steps) {
+                return Err(Fault::StaleMeasurement {
+                    joint,
+                    steps: self.identical[joint],
+                });
+            }
         }
         self.q_hold.copy_from_slice(input.q);
         self.has_hold = true;
@@ -235,20 +241,16 @@ impl SafeHold {
     }
 
     fn update_staleness(&mut self, q: &[f64], qdot: &[f64], qdot_ref: &[f64]) {
-        let moving = |v: &[f64]| {
-            v.iter()
-                .any(|x| x.is_finite() && x.abs() > self.stale_velocity)
-        };
-        let expected = moving(qdot_ref) || moving(qdot);
-        let same = self.has_last_q
-            && q.iter()
-                .zip(&self.last_q)
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-        self.identical = if same && expected {
-            self.identical.saturating_add(1)
-        } else {
-            0
-        };
+        let fast = |x: f64| x.is_finite() && x.abs() > self.stale_velocity;
+        for i in 0..self.identical.len() {
+            let expected = fast(qdot_ref[i]) || fast(qdot[i]);
+            let same = self.has_last_q && q[i].to_bits() == self.last_q[i].to_bits();
+            self.identical[i] = if same && expected {
+                self.identical[i].saturating_add(1)
+            } else {
+                0
+            };
+        }
         self.last_q.copy_from_slice(q);
         self.has_last_q = true;
     }

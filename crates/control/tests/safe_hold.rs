@@ -227,7 +227,7 @@ fn stale_samples_trigger_the_hold_and_recover() {
         );
         assert_eq!(
             statuses[4].fault(),
-            Some(Fault::StaleMeasurement { steps: 5 })
+            Some(Fault::StaleMeasurement { joint: 0, steps: 5 })
         );
         assert!(statuses[4..]
             .iter()
@@ -241,6 +241,53 @@ fn stale_samples_trigger_the_hold_and_recover() {
             "{} recovers",
             c.name()
         );
+    }
+}
+
+/// Issue 14: one joint frozen while the others move, and repeated 10 ms dropouts, were not
+/// detected (staleness needed the whole position vector to repeat; at least 50 steps).
+#[test]
+fn one_frozen_joint_and_short_dropouts_are_stale_and_named() {
+    let model = two_link();
+    for mut c in controllers(&model) {
+        let mut tau = [0.0; 2];
+        // Joint 1 freezes for 100 ms at t = 0.5 s (it moves at about 0.9 rad/s there);
+        // joint 0 keeps reporting fresh samples.
+        let frozen = Sample::at(500).q[1];
+        let mut stale = Vec::new();
+        for k in 400..600 {
+            let mut s = Sample::at(k);
+            if (500..600).contains(&k) {
+                s.q[1] = frozen;
+            }
+            let status = c.step(&s.input(), 1e-3, &mut tau);
+            check_valid(&tau, &model);
+            if let Some(Fault::StaleMeasurement { joint, .. }) = status.fault() {
+                assert_eq!(joint, 1, "{}", c.name());
+                stale.push(k);
+            }
+        }
+        // The 5th repeated sample (k = 505) is the first fault, every later one too.
+        assert_eq!(stale, (505..600).collect::<Vec<_>>(), "{}", c.name());
+        // Twenty dropouts of 10 ms: each is detected.
+        let mut detected = 0;
+        for d in 0..20 {
+            let start = 1000 + 50 * d;
+            let held = Sample::at(start).q.clone();
+            let mut seen = false;
+            for k in start..start + 50 {
+                let mut s = Sample::at(k);
+                if k < start + 10 {
+                    s.q = held.clone();
+                }
+                seen |= matches!(
+                    c.step(&s.input(), 1e-3, &mut tau).fault(),
+                    Some(Fault::StaleMeasurement { .. })
+                );
+            }
+            detected += usize::from(seen);
+        }
+        assert_eq!(detected, 20, "{}", c.name());
     }
 }
 

@@ -20,6 +20,7 @@ pub(crate) struct Gather {
     timing_stride: usize,
     step_times: Vec<f64>,
     faults: usize,
+    stale_measurements: usize,
     limit_violations: usize,
     nonfinite_torques: usize,
     observer_faults: usize,
@@ -62,6 +63,7 @@ impl Gather {
             timing_stride: (steps / MAX_TIMINGS).max(1),
             step_times: Vec::with_capacity(steps.min(MAX_TIMINGS)),
             faults: 0,
+            stale_measurements: 0,
             limit_violations: 0,
             nonfinite_torques: 0,
             observer_faults: 0,
@@ -89,6 +91,10 @@ impl Gather {
         }
         if !status.controller.is_ok() {
             self.faults += 1;
+        }
+        if let Some(admittance_control::Fault::StaleMeasurement { .. }) = status.controller.fault()
+        {
+            self.stale_measurements += 1;
         }
         for (i, t_i) in lp.torque().iter().enumerate() {
             if !t_i.is_finite() {
@@ -162,6 +168,7 @@ impl Gather {
                 .collect(),
             controller_step_median_us: median(&mut self.step_times),
             faults: self.faults,
+            stale_measurements: self.stale_measurements,
             torque_limit_violations: self.limit_violations,
             nonfinite_torques: self.nonfinite_torques,
             steps: self.steps,

@@ -38,6 +38,9 @@ pub struct VariantMetrics {
     pub controller_step_median_us: f64,
     /// Controller faults (steps).
     pub faults: usize,
+    /// Steps on which some joint's encoder reading was stale (frozen or dropped): a subset
+    /// of `faults`.
+    pub stale_measurements: usize,
     /// Commands beyond the effort limit.
     pub torque_limit_violations: usize,
     /// Non-finite commands.
