@@ -14,10 +14,10 @@ fn default_damping() -> JointValues {
     JointValues::Uniform(0.5)
 }
 fn default_stale_steps() -> u32 {
-    5
+    8
 }
 fn default_stale_velocity() -> f64 {
-    0.2
+    0.3
 }
 fn yes() -> bool {
     true
@@ -35,14 +35,15 @@ pub struct SafeHoldConfig {
     pub damping: JointValues,
     /// `N`: a joint's measurement is stale when its position has been bit-identical to the
     /// previous sample for `N` consecutive steps while that joint is expected to move. Zero
-    /// disables the check. Default 5 (a 10 ms dropout at 1 kHz is caught).
+    /// disables the check. Default 8 (a 10 ms dropout at 1 kHz is caught).
     #[serde(default = "default_stale_steps")]
     pub stale_steps: u32,
-    /// Joint `i` is expected to move when `|q_ref'_i|` or its measured `|qdot_i|` exceeds
-    /// this speed (rad/s); default 0.2. Choose `N` and this speed so that
+    /// Joint `i` is expected to move when its reference speed `|q_ref'_i|` exceeds this
+    /// speed (rad/s); default 0.3. Choose `N` and this speed so that
     /// `stale_velocity * N * dt` is well above the encoder quantisation: a slowly moving
-    /// joint legitimately repeats its quantised angle for a few steps (defaults: 1e-3 rad
-    /// in 5 steps at 1 kHz, ten counts of a 16-bit encoder).
+    /// joint legitimately repeats its quantised angle for a few steps, and a joint held by
+    /// static friction at a reversal repeats it while its reference moves on (defaults:
+    /// 2.4e-3 rad in 8 steps at 1 kHz, 25 counts of a 16-bit encoder).
     #[serde(default = "default_stale_velocity")]
     pub stale_velocity: f64,
     /// Whether the hold includes the nominal gravity `G_nominal(q_hold)`; default true. Turn
@@ -208,7 +209,7 @@ impl SafeHold {
                 joint,
             });
         }
-        self.update_staleness(input.q, input.qdot, input.qdot_ref);
+        self.update_staleness(input.q, input.qdot_ref);
         if self.stale_steps > 0 {
             if let Some(joint) = self.identical.iter().position(|&c| c >= self.stale_steps) {
                 return Err(Fault::StaleMeasurement {
@@ -240,10 +241,12 @@ impl SafeHold {
         Ok(())
     }
 
-    fn update_staleness(&mut self, q: &[f64], qdot: &[f64], qdot_ref: &[f64]) {
+    fn update_staleness(&mut self, q: &[f64], qdot_ref: &[f64]) {
         let fast = |x: f64| x.is_finite() && x.abs() > self.stale_velocity;
         for i in 0..self.identical.len() {
-            let expected = fast(qdot_ref[i]) || fast(qdot[i]);
+            // The reference, not the measured velocity: a filtered velocity lags, and at a
+            // reversal the encoder legitimately repeats while it still reads fast.
+            let expected = fast(qdot_ref[i]);
             let same = self.has_last_q && q[i].to_bits() == self.last_q[i].to_bits();
             self.identical[i] = if same && expected {
                 self.identical[i].saturating_add(1)
