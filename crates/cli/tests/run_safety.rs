@@ -315,11 +315,28 @@ fn a_frozen_joint_is_detected_and_counted() {
     ]);
     assert_eq!(code, 0, "{err}");
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let m = &summary["variants"]["momentum"];
     let stale = m["stale_measurements"].as_u64().unwrap();
     // s0 moves at 0.45-0.52 rad/s over 5-6 s: all but the first 4 of 1000 frozen samples.
     assert!((900..=1000).contains(&stale), "{m}");
     assert_eq!(m["faults"].as_u64().unwrap(), stale, "{m}");
+}
+
+/// Found by the reliability harness: `plant.rate_hz = 1e9` with a short duration passed
+/// the step limit (3e8 steps) and ran for minutes. The rate is bounded.
+#[test]
+fn an_absurd_plant_rate_is_refused_before_the_run() {
+    let tmp = tempdir();
+    let s = write_scenario(tmp.path(), "rate_hz = 1e9");
+    let out = tmp.path().join("run");
+    let started = std::time::Instant::now();
+    let (code, err) = admittance(&["run", &s, "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("rate_hz") && err.contains("1000000 Hz"),
+        "{err}"
+    );
+    assert!(started.elapsed().as_secs_f64() < 10.0);
+    assert!(!out.exists());
 }

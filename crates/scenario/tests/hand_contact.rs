@@ -55,7 +55,11 @@ fn the_wall_loads_the_joints_and_the_oracle_reads_the_true_force() {
     let after = y[t.iter().position(|&x| x >= 21.0).unwrap()];
     assert!(after - before > 0.02, "the hand moved {} m", after - before);
     let end = *y.last().unwrap();
-    assert!((end - after).abs() < 0.005, "drifted {} m after release", end - after);
+    assert!(
+        (end - after).abs() < 0.005,
+        "drifted {} m after release",
+        end - after
+    );
 }
 
 #[test]

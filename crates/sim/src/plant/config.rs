@@ -369,12 +369,25 @@ pub(crate) fn frame_index(
     }
 }
 
+/// The highest plant rate (Hz): a 1 us step, 200 times finer than the scenarios' 5 kHz.
+/// Beyond it a run's work grows without improving anything the controller can see.
+pub const MAX_RATE_HZ: f64 = 1e6;
+
 impl PlantConfig {
     /// Number of plant steps per control period (`rate_hz / control_rate_hz`), after
     /// checking that both rates are positive and the ratio is a whole number.
     pub fn substeps(&self) -> Result<usize, SimError> {
         positive(|| "rate_hz".into(), self.rate_hz)?;
         positive(|| "control_rate_hz".into(), self.control_rate_hz)?;
+        if self.rate_hz > MAX_RATE_HZ {
+            return Err(SimError::config(
+                "rate_hz",
+                format!(
+                    "{} Hz is beyond the {MAX_RATE_HZ} Hz this simulator supports (a 1 us step; the scenarios use 5 kHz)",
+                    self.rate_hz
+                ),
+            ));
+        }
         let ratio = self.rate_hz / self.control_rate_hz;
         let rounded = ratio.round();
         if rounded < 1.0 || (ratio - rounded).abs() > 1e-9 * ratio {
