@@ -1,0 +1,59 @@
+"""``python -m admittance.mujoco``: experiment B on a MuJoCo plant (see the package docs)."""
+
+import argparse
+import sys
+
+from ._cosim import VARIANTS, CosimConfig, run_cosimulation
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(
+        prog="python -m admittance.mujoco",
+        description="Experiment B (observers driving the admittance model) on the arm's URDF simulated by MuJoCo, "
+        "with joint friction, damping and armature the controller and observers do not know.",
+    )
+    p.add_argument("--urdf", required=True, help="the arm's URDF")
+    p.add_argument("--base", help="base link (default: the URDF's root)")
+    p.add_argument("--tip", required=True, help="the hand link")
+    p.add_argument("--out", required=True, help="the run folder to write (refused if it holds files this tool did not write)")
+    p.add_argument("--contact", choices=["push", "wall"], default="push")
+    p.add_argument("--duration", type=float, default=30.0, help="seconds of the admittance experiment per variant (30)")
+    p.add_argument("--training-duration", type=float, default=450.0, help="seconds of free-motion data (450, as experiment B)")
+    p.add_argument("--validation-duration", type=float, default=90.0)
+    p.add_argument("--nodes", type=int, default=1000, help="nodes of each network (1000)")
+    p.add_argument("--width-scale", type=float, default=2.0, help="Gaussian widths: this times the mean distance to the nearest centres (2, as admittance train)")
+    p.add_argument("--push-force", type=float, default=10.0, help="peak of the scripted push at the hand, N (10)")
+    p.add_argument("--friction-scale", type=float, default=1.0, help="scales the unknown joint friction, damping and armature (1)")
+    p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--force", action="store_true", help="replace an --out folder this tool did not write")
+    a = p.parse_args(argv)
+    variants = [v for v in a.variants.split(",") if v]
+    unknown = [v for v in variants if v not in VARIANTS]
+    if unknown:
+        p.error(f"--variants: unknown {unknown}; choose among {VARIANTS}")
+    for name in ("duration", "training_duration", "validation_duration", "friction_scale", "push_force", "width_scale"):
+        value = getattr(a, name)
+        if not (value == value and 0 < value < 1e6):
+            p.error(f"--{name.replace('_', '-')} {value}: must be a positive number")
+    if a.nodes < 1:
+        p.error("--nodes must be at least 1")
+    cfg = CosimConfig(
+        urdf=a.urdf, base=a.base, tip=a.tip, out=a.out, contact=a.contact, duration=a.duration,
+        training_duration=a.training_duration, validation_duration=a.validation_duration,
+        nodes=a.nodes, friction_scale=a.friction_scale, push_force=a.push_force, width_scale=a.width_scale, seed=a.seed, force=a.force, variants=variants,
+    )
+    try:
+        summary = run_cosimulation(cfg, log=lambda s: print(s, file=sys.stderr))
+    except (OSError, ValueError) as e:
+        print(f"admittance.mujoco: {e}", file=sys.stderr)
+        return 3
+    if summary["failures"]:
+        print("admittance.mujoco: the run failed: " + "; ".join(summary["failures"]) + f"; {a.out} holds what ran", file=sys.stderr)
+        return 1
+    print(f"wrote {a.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
