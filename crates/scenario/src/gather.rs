@@ -80,7 +80,13 @@ impl Gather {
     }
 
     /// After the loop's step `k`: faults, timing, the command against the effort limits.
-    pub fn after_control(&mut self, k: usize, status: &LoopStatus, lp: &ClosedLoop) {
+    pub fn after_control(
+        &mut self,
+        k: usize,
+        status: &LoopStatus,
+        lp: &ClosedLoop,
+        stale_sample: bool,
+    ) {
         if !status.observer_ok {
             self.observer_faults += 1;
         }
@@ -92,8 +98,11 @@ impl Gather {
         if !status.controller.is_ok() {
             self.faults += 1;
         }
-        if let Some(admittance_control::Fault::StaleMeasurement { .. }) = status.controller.fault()
-        {
+        let held_stale = matches!(
+            status.controller.fault(),
+            Some(admittance_control::Fault::StaleMeasurement { .. })
+        );
+        if held_stale || stale_sample {
             self.stale_measurements += 1;
         }
         for (i, t_i) in lp.torque().iter().enumerate() {

@@ -139,7 +139,10 @@ fn simulate_variant(
             measurement: m,
             true_external_torque: plant.tau_ext(),
         });
-        gather.after_control(k, &status, &closed_loop);
+        // A sample older than this period (the driver repeated a joint's last reading) is
+        // stale whether or not the controller could tell from the values.
+        let stale_sample = m.sample_time.iter().any(|&ts| t - ts > 0.5 * dt);
+        gather.after_control(k, &status, &closed_loop, stale_sample);
         if let Some(ev) = events.as_mut() {
             ev.after_step(k, t, &model, plant.q(), plant.qdot(), &closed_loop);
         }

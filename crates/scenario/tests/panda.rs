@@ -23,7 +23,10 @@ fn panda_experiment_a_runs_within_every_limit() {
         assert_eq!(number(&run, "torque_limit_violations"), 0.0, "{variant}");
         assert_eq!(number(&run, "faults"), 0.0, "{variant}");
         for key in ["q_limit_violation_fraction", "torque_saturation_fraction"] {
-            assert!(per_joint(&run, key).iter().all(|&v| v == 0.0), "{variant}: {key}");
+            assert!(
+                per_joint(&run, key).iter().all(|&v| v == 0.0),
+                "{variant}: {key}"
+            );
         }
         // A loose bound against instability: the PD baseline lags by a tenth of a radian
         // on the shoulder (that is the point of the comparison).
@@ -69,10 +72,15 @@ fn a_baxter_scenario_pointed_at_the_panda_names_what_does_not_fit() {
     ] {
         source.set(o).unwrap();
     }
-    let err = run_variant(&source, &path, Some("nn_compensated"), &RunOptions::default())
-        .err()
-        .expect("Baxter's joint names and pose on the Panda")
-        .to_string();
+    let err = run_variant(
+        &source,
+        &path,
+        Some("nn_compensated"),
+        &RunOptions::default(),
+    )
+    .err()
+    .expect("Baxter's joint names and pose on the Panda")
+    .to_string();
     // The friction and deadzone entries name Baxter's joints; the pose puts joint 4 outside
     // [-3.07, -0.07].
     assert!(err.contains("left_s0") || err.contains("left_s1"), "{err}");
