@@ -32,12 +32,13 @@
 // Scenario errors carry the file, line, key and hint by value; they are the cold path,
 // returned once per bad file, so their size is not worth a box on every signature.
 #![allow(clippy::result_large_err)]
+#![warn(missing_docs)]
 
-pub mod conditioning;
-pub mod environment;
-pub mod integrator;
-pub mod plant;
-pub mod sensors;
+mod conditioning;
+mod environment;
+mod integrator;
+mod plant;
+mod sensors;
 
 pub use conditioning::InputConditioner;
 pub use environment::{
