@@ -318,7 +318,7 @@ fn a_frozen_joint_is_detected_and_counted() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let m = &summary["variants"]["momentum"];
     // Every one of the 1000 frozen samples is reported (the sample's time stamp is old);
-    // the controller holds safe from the 15th repeated value on (s0 moves at 0.45-0.52 rad/s).
+    // the controller holds safe from the 30th repeated value on (s0 moves at 0.45-0.52 rad/s).
     assert_eq!(m["stale_measurements"].as_u64().unwrap(), 1000, "{m}");
     let held = m["faults"].as_u64().unwrap();
     assert!((900..1000).contains(&held), "{m}");

@@ -14,7 +14,7 @@ fn default_damping() -> JointValues {
     JointValues::Uniform(0.5)
 }
 fn default_stale_steps() -> u32 {
-    15
+    30
 }
 fn default_stale_velocity() -> f64 {
     0.3
@@ -35,9 +35,10 @@ pub struct SafeHoldConfig {
     pub damping: JointValues,
     /// `N`: a joint's measurement is stale when its position has been bit-identical to the
     /// previous sample for `N` consecutive steps while that joint is expected to move. Zero
-    /// disables the check. Default 15: a joint held by static friction at a reversal, while
-    /// the PD lags its reference, repeats its reading for several milliseconds (8 gave false
-    /// alarms in the free-motion scenarios; 15 none in 120 s).
+    /// disables the check. Default 30: a joint held by static friction at a reversal, while
+    /// the PD lags its reference, repeats its reading for several milliseconds (8 and 15 gave
+    /// false alarms in the 450 s free-motion scenarios, 25 none). Shorter dropouts are still
+    /// reported from the samples' time stamps (`stale_measurements`).
     #[serde(default = "default_stale_steps")]
     pub stale_steps: u32,
     /// Joint `i` is expected to move when its reference speed `|q_ref'_i|` exceeds this
@@ -45,7 +46,7 @@ pub struct SafeHoldConfig {
     /// `stale_velocity * N * dt` is well above the encoder quantisation: a slowly moving
     /// joint legitimately repeats its quantised angle for a few steps, and a joint held by
     /// static friction at a reversal repeats it while its reference moves on (defaults:
-    /// 4.5e-3 rad in 15 steps at 1 kHz, 47 counts of a 16-bit encoder).
+    /// 9e-3 rad in 30 steps at 1 kHz, 94 counts of a 16-bit encoder).
     #[serde(default = "default_stale_velocity")]
     pub stale_velocity: f64,
     /// Whether the hold includes the nominal gravity `G_nominal(q_hold)`; default true. Turn
