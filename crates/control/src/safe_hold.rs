@@ -91,9 +91,9 @@ impl Default for SafeHoldConfig {
 ///
 /// **Staleness**, per joint: each step whose finite `q_i` is bit-identical to the previous
 /// sample while joint `i` is expected to move (see [`SafeHoldConfig::stale_velocity`])
-/// increments the joint's counter; any change, or no expected motion, resets it. The fault
-/// names the first joint whose counter is at least `N` ([`SafeHoldConfig::stale_steps`]) and
-/// ends at its first changed sample.
+/// increments the joint's counter; any change, or no expected motion before the counter
+/// reaches `N` ([`SafeHoldConfig::stale_steps`]), resets it. The fault names the first joint
+/// whose counter is at least `N` and lasts until that joint's reading changes.
 #[derive(Clone, Debug)]
 pub struct SafeHold {
     model: Arc<Model>,
@@ -251,7 +251,10 @@ impl SafeHold {
             // reversal the encoder legitimately repeats while it still reads fast.
             let expected = fast(qdot_ref[i]);
             let same = self.has_last_q && q[i].to_bits() == self.last_q[i].to_bits();
-            self.identical[i] = if same && expected {
+            // Once stale, a joint stays stale until its reading changes: the reference may
+            // slow down meanwhile (the loop is holding), which must not release the hold.
+            let latched = self.stale_steps > 0 && self.identical[i] >= self.stale_steps;
+            self.identical[i] = if same && (expected || latched) {
                 self.identical[i].saturating_add(1)
             } else {
                 0
