@@ -735,11 +735,11 @@ fn odd_urdfs() {
                 }
                 text[..cut].to_string()
             }
-            _ => text.replacen(
-                "type=\"revolute\"",
-                *rng.pick(&["type=\"floating\"", "type=\"planar\"", "type=\"ball\""]),
-                1,
-            ),
+            _ => {
+                let kinds = ["type=\"floating\"", "type=\"planar\"", "type=\"ball\""];
+                let kind = kinds[rng.below(kinds.len())];
+                text.replacen("type=\"revolute\"", kind, 1)
+            }
         };
         let file = family.dir().join(format!("case_{k}.urdf"));
         std::fs::write(&file, mutated).unwrap();

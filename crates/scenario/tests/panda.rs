@@ -78,8 +78,7 @@ fn a_baxter_scenario_pointed_at_the_panda_names_what_does_not_fit() {
         Some("nn_compensated"),
         &RunOptions::default(),
     )
-    .err()
-    .expect("Baxter's joint names and pose on the Panda")
+    .expect_err("Baxter's joint names and pose on the Panda")
     .to_string();
     // The friction and deadzone entries name Baxter's joints; the pose puts joint 4 outside
     // [-3.07, -0.07].
