@@ -23,3 +23,4 @@ sys.exit(0 if pinocchio.__version__ == '$PIN_VERSION' and numpy.__version__ == '
     "$VENV/bin/python" -m pip install --quiet "pin==$PIN_VERSION" "numpy==$NUMPY_VERSION"
 fi
 "$VENV/bin/python" "$ROOT/scripts/oracle/generate_fixtures.py" "$@"
+"$VENV/bin/python" "$ROOT/scripts/oracle/generate_regressor_fixtures.py"

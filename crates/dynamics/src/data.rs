@@ -49,6 +49,8 @@ pub struct Data {
     /// `Jdot qdot` of a frame: the classical acceleration at zero joint acceleration,
     /// linear part first, base axes.
     pub jdot_qdot: Vector6<f64>,
+    /// Joint-torque regressor `Y(q, q', q'')`, n x 10 n ([`crate::joint_torque_regressor`]).
+    pub regressor: DMatrix<f64>,
 
     pub(crate) composite: Vec<Inertia>,
     pub(crate) world_subspace: Vec<Vector6<f64>>,
@@ -85,6 +87,7 @@ impl Data {
             qddot: DVector::zeros(n),
             jacobian: Matrix6xX::zeros(n),
             jdot_qdot: Vector6::zeros(),
+            regressor: DMatrix::zeros(n, 10 * n),
             composite: vec![Inertia::zero(); n],
             world_subspace: vec![Vector6::zeros(); n],
             world_subspace_rate: vec![Vector6::zeros(); n],

@@ -31,6 +31,7 @@ pub mod algorithms;
 mod data;
 mod error;
 mod fingerprint;
+mod identification;
 mod model;
 pub mod spatial;
 mod urdf;
@@ -42,10 +43,18 @@ pub use algorithms::energy::{kinetic_energy, potential_energy};
 pub use algorithms::jacobian::{frame_jacobian, frame_jdot_qdot, tip_jacobian, tip_jdot_qdot};
 pub use algorithms::kinematics::{forward_kinematics, update_frame_placements};
 pub use algorithms::momentum::momentum_observer_terms;
+pub use algorithms::regressor::{
+    inertial_parameters, joint_torque_regressor, with_inertial_parameters, PARAMETERS_PER_BODY,
+};
 pub use algorithms::rnea::{
     gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea, rnea_with_tip_wrench,
 };
 pub use data::Data;
+pub use identification::{
+    identify, is_physically_consistent, BaseParameters, Identification, IdentificationFile,
+    IdentificationSettings, IdentificationSummary, JointTerms, Samples, IDENTIFICATION_FORMAT,
+    IDENTIFICATION_FORMAT_VERSION,
+};
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,

@@ -35,6 +35,7 @@ fn no_algorithm_allocates_after_construction() {
         tip_jdot_qdot(&model, data, &q, &v).unwrap();
         kinetic_energy(&model, data, &q, &v).unwrap();
         potential_energy(&model, data, &q).unwrap();
+        joint_torque_regressor(&model, data, &q, &v, &a).unwrap();
         // Errors are reported without allocating too.
         assert!(rnea(&model, data, &short, &v, &a).is_err());
         assert!(frame_jacobian(&model, data, &q, 999).is_err());
@@ -51,4 +52,22 @@ fn no_algorithm_allocates_after_construction() {
     );
     // The counter itself sees this thread's allocations.
     assert!(count_allocations(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);
+}
+
+#[test]
+fn identified_prediction_and_joint_terms_do_not_allocate() {
+    let model = common::baxter();
+    let ident = Identification::from_model(model.clone());
+    let mut data = Data::new(&model);
+    let q = [0.1, -0.4, 0.3, 1.2, -0.2, 0.6, 0.1];
+    let v = [0.5, -0.3, 0.2, 0.4, -0.6, 0.1, 0.9];
+    let mut out = [0.0; 7];
+    ident.predict(&mut data, &q, &v, &v, &mut out).unwrap();
+    let count = count_allocations(|| {
+        for _ in 0..100 {
+            ident.predict(&mut data, &q, &v, &v, &mut out).unwrap();
+            ident.joint_friction_torque(&q, &v, &mut out).unwrap();
+        }
+    });
+    assert_eq!(count, 0);
 }

@@ -7,6 +7,7 @@ pub mod energy;
 pub mod jacobian;
 pub mod kinematics;
 pub mod momentum;
+pub mod regressor;
 pub mod rnea;
 
 use crate::data::Data;

@@ -1,0 +1,231 @@
+//! Least-squares identification of an arm from free motion (docs/method.md section 1):
+//! `tau = Y(q, q', q'') pi + tau_joint`, regularised toward the URDF, every choice made on
+//! motion the fit did not see.
+
+use nalgebra::DVector;
+
+use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
+use crate::error::DynamicsError;
+use crate::identification::base::BaseParameters;
+use crate::identification::consistency::project;
+use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
+use crate::identification::normal::{accumulate, columns, solve, Normal};
+use crate::identification::samples::Samples;
+use crate::identification::settings::IdentificationSettings;
+use crate::identification::{Identification, IdentificationSummary};
+use crate::model::Model;
+
+/// Ridge weights tried when none is given: 1e-8 to 1e2, half a decade apart.
+fn ridge_grid() -> impl Iterator<Item = f64> {
+    (0..=20).map(|k| 10f64.powf(-8.0 + 0.5 * k as f64))
+}
+
+/// Where settings are scored: a separate recording, or held-out contiguous stretches.
+enum Held<'a> {
+    Recording { train: Normal, validation: Normal, samples: Samples<'a> },
+    Folds { blocks: Vec<Normal>, total: Normal },
+}
+
+impl Held<'_> {
+    /// Mean squared error on held-out motion of the fit with these columns and ridge.
+    fn score(&self, active: &[bool], prior: &DVector<f64>, ridge: f64) -> f64 {
+        match self {
+            Held::Recording { train, validation, .. } => match solve(train, active, prior, ridge) {
+                Some(x) => validation.squared_error(&x) / validation.rows as f64,
+                None => f64::INFINITY,
+            },
+            Held::Folds { blocks, total } => {
+                let mut sse = 0.0;
+                for b in blocks {
+                    let mut rest = total.clone();
+                    rest.sub(b);
+                    match solve(&rest, active, prior, ridge) {
+                        Some(x) => sse += b.squared_error(&x),
+                        None => return f64::INFINITY,
+                    }
+                }
+                sse / total.rows as f64
+            }
+        }
+    }
+
+    fn all_training(&self) -> &Normal {
+        match self {
+            Held::Recording { train, .. } => train,
+            Held::Folds { total, .. } => total,
+        }
+    }
+}
+
+/// Identifies `model`'s inertial parameters and joint terms from free-motion `train`
+/// samples (see [`IdentificationSettings`]); `validation`, when given, is another
+/// recording on which every setting is chosen and the expected error measured, else
+/// blocked cross-validation over contiguous stretches of `train` does both.
+pub fn identify(
+    model: &Model,
+    train: &Samples,
+    validation: Option<&Samples>,
+    settings: &IdentificationSettings,
+) -> Result<Identification, DynamicsError> {
+    settings.validate()?;
+    let n = model.nq();
+    train.check("training samples", n)?;
+    let min_samples = 2 * settings.folds.max(2) * n;
+    if train.len() < min_samples.max(20) {
+        return Err(DynamicsError::InvalidArgument(format!(
+            "training samples: {} samples are too few to identify {n} joints (need at least {})",
+            train.len(),
+            min_samples.max(20)
+        )));
+    }
+    if let Some(v) = validation {
+        v.check("validation samples", n)?;
+        if v.len() < 10 {
+            return Err(DynamicsError::InvalidArgument(format!("validation samples: {} are too few (need 10)", v.len())));
+        }
+    }
+    let width = settings.coulomb_width;
+    let held = match validation {
+        Some(v) => Held::Recording {
+            train: accumulate(model, train, width, 1)?.remove(0),
+            validation: accumulate(model, v, width, 1)?.remove(0),
+            samples: *v,
+        },
+        None => {
+            let blocks = accumulate(model, train, width, settings.folds)?;
+            let mut total = Normal::zeros(columns(n));
+            blocks.iter().for_each(|b| total.add(b));
+            Held::Folds { blocks, total }
+        }
+    };
+    let p = columns(n);
+    let mut prior = DVector::zeros(p);
+    prior.rows_mut(0, PARAMETERS_PER_BODY * n).copy_from_slice(&inertial_parameters(model));
+    let joint_col = |i: usize, f: usize| PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + f;
+    let mut active: Vec<bool> = (0..p).map(|c| c < PARAMETERS_PER_BODY * n || settings.friction).collect();
+    for i in 0..n {
+        for f in FIRST_SPRING_FEATURE..JOINT_FEATURES {
+            active[joint_col(i, f)] = false;
+        }
+    }
+    let choose_ridge = |active: &[bool]| -> (f64, f64) {
+        match settings.ridge {
+            Some(r) => (r, held.score(active, &prior, r)),
+            None => ridge_grid()
+                .map(|r| (r, held.score(active, &prior, r)))
+                .fold((f64::NAN, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best }),
+        }
+    };
+    let (mut ridge, mut best) = choose_ridge(&active);
+    let mut springs = vec![false; n];
+    if settings.springs {
+        for i in 0..n {
+            let mut trial = active.clone();
+            (FIRST_SPRING_FEATURE..JOINT_FEATURES).for_each(|f| trial[joint_col(i, f)] = true);
+            let score = held.score(&trial, &prior, ridge);
+            if score < 0.99 * best {
+                active = trial;
+                best = score;
+                springs[i] = true;
+            }
+        }
+        if springs.iter().any(|&s| s) {
+            (ridge, best) = choose_ridge(&active);
+        }
+    }
+    if !best.is_finite() {
+        return Err(DynamicsError::InvalidArgument(
+            "identification failed: no setting gave a finite fit (the samples may not move the arm: check the recording)".into(),
+        ));
+    }
+    let fit = |normal: &Normal| -> Result<(DVector<f64>, Vec<usize>), DynamicsError> {
+        let x = solve(normal, &active, &prior, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular".into()))?;
+        if settings.physical_consistency { consistent(normal, &active, &prior, ridge, x, n) } else { Ok((x, Vec::new())) }
+    };
+    let (x, projected) = fit(held.all_training())?;
+    let identified = Identification::from_solution(model, &x, width)?;
+    let (per_joint, held_out) = match &held {
+        Held::Recording { samples, .. } => (identified.joint_errors(samples)?.rms, "validation recording".to_string()),
+        Held::Folds { blocks, total } => {
+            // The reported error of each stretch comes from a fit that never saw it.
+            let mut sq = vec![0.0; n];
+            let mut count = 0;
+            for (b, normal) in blocks.iter().enumerate() {
+                let mut rest = total.clone();
+                rest.sub(normal);
+                let (xb, _) = fit(&rest)?;
+                let id = Identification::from_solution(model, &xb, width)?;
+                let (s, e) = (b * train.len() / blocks.len(), (b + 1) * train.len() / blocks.len());
+                let part = train.slice(s, e);
+                let errs = id.joint_errors(&part)?;
+                for i in 0..n {
+                    sq[i] += errs.rms[i].powi(2) * part.len() as f64;
+                }
+                count += part.len();
+            }
+            let rms: Vec<f64> = sq.iter().map(|s| (s / count as f64).sqrt()).collect();
+            (rms, format!("blocked cross-validation, {} contiguous stretches", blocks.len()))
+        }
+    };
+    // The URDF's own error on the same held-out motion (it was fitted to nothing).
+    let prior_model = Identification::from_solution(model, &prior, width)?;
+    let prior_rms = match &held {
+        Held::Recording { samples, .. } => prior_model.joint_errors(samples)?.rms,
+        Held::Folds { .. } => prior_model.joint_errors(train)?.rms,
+    };
+    let base = BaseParameters::new(model, 100, 1)?;
+    let summary = IdentificationSummary {
+        held_out,
+        ridge,
+        springs,
+        projected_bodies: projected,
+        expected_false_torque_rms: per_joint,
+        prior_false_torque_rms: prior_rms,
+        base_parameters: base.rank(),
+        condition_number: base_condition(&base, held.all_training()),
+        training_samples: train.len(),
+        validation_samples: validation.map_or(0, |v| v.len()),
+        settings: settings.clone(),
+    };
+    Ok(Identification { summary, ..identified })
+}
+
+/// Projects every body onto the physically possible ones, then refits the joint terms
+/// with the bodies held. Returns the solution and the bodies that moved.
+fn consistent(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64, mut x: DVector<f64>, n: usize) -> Result<(DVector<f64>, Vec<usize>), DynamicsError> {
+    let mut moved = Vec::new();
+    for b in 0..n {
+        let r = b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY;
+        let mut p = [0.0; PARAMETERS_PER_BODY];
+        p.copy_from_slice(&x.as_slice()[r.clone()]);
+        let q = project(&p).unwrap_or_else(|| {
+            let mut prior_body = [0.0; PARAMETERS_PER_BODY];
+            prior_body.copy_from_slice(&prior.as_slice()[r.clone()]);
+            prior_body
+        });
+        if q != p {
+            moved.push(b);
+            x.rows_mut(r.start, PARAMETERS_PER_BODY).copy_from_slice(&q);
+        }
+    }
+    if moved.is_empty() {
+        return Ok((x, moved));
+    }
+    // Bodies held at their projected values: they act as a prior with no freedom.
+    let joint_only: Vec<bool> = (0..active.len()).map(|c| c >= PARAMETERS_PER_BODY * n && active[c]).collect();
+    let refit = solve(normal, &joint_only, &x, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: refitting the joint terms failed".into()))?;
+    Ok((refit, moved))
+}
+
+/// Condition number of the training data's base regressor, from the Gram matrix of its
+/// independent inertial columns scaled to unit norm.
+fn base_condition(base: &BaseParameters, normal: &Normal) -> f64 {
+    let idx = base.independent();
+    let g = nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| {
+        let (a, b) = (idx[r], idx[c]);
+        normal.gram[(a, b)] / (normal.gram[(a, a)] * normal.gram[(b, b)]).sqrt().max(1e-300)
+    });
+    let e = g.symmetric_eigenvalues();
+    if e.min() > 0.0 { (e.max() / e.min()).sqrt() } else { f64::INFINITY }
+}
+

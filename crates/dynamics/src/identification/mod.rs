@@ -1,0 +1,201 @@
+//! Identification of a real arm (docs/method.md section 1): the inertial parameters of
+//! every body and what each joint adds (rotor inertia, friction, offset, springs), fitted
+//! by least squares to free motion, regularised toward the URDF, physically consistent,
+//! with every choice made and every error measured on motion the fit did not see.
+//!
+//! ```no_run
+//! use admittance_dynamics::{identify, IdentificationSettings, Model, Samples};
+//! # let (q, qd, qdd, tau) = (vec![0.0; 70], vec![0.0; 70], vec![0.0; 70], vec![0.0; 70]);
+//! let model = Model::from_urdf_file("models/baxter_left_arm.urdf".as_ref(), None, None).unwrap();
+//! let train = Samples { q: &q, qdot: &qd, qddot: &qdd, tau: &tau, dof: 7 };
+//! let ident = identify(&model, &train, None, &IdentificationSettings::default()).unwrap();
+//! println!("expected false torque per joint (N m): {:?}", ident.summary.expected_false_torque_rms);
+//! ```
+
+mod base;
+mod consistency;
+mod file;
+mod fit;
+mod joint_terms;
+mod normal;
+mod samples;
+mod settings;
+
+pub use base::BaseParameters;
+pub use consistency::is_physically_consistent;
+pub use file::{IdentificationFile, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION};
+pub use fit::identify;
+pub use joint_terms::JointTerms;
+pub use samples::Samples;
+pub use settings::IdentificationSettings;
+
+use serde::{Deserialize, Serialize};
+
+use crate::algorithms::regressor::{with_inertial_parameters, PARAMETERS_PER_BODY};
+use crate::algorithms::rnea::rnea;
+use crate::data::Data;
+use crate::error::{check_len, DimensionError, DynamicsError};
+use crate::model::Model;
+
+/// An identified arm: its rigid-body model (the URDF's kinematics with identified
+/// inertias) and each joint's terms. `tau = RNEA(q, q', q'') + tau_joint(q, q', q'')`.
+#[derive(Clone, Debug)]
+pub struct Identification {
+    /// The identified rigid-body model.
+    pub model: Model,
+    /// Per-joint rotor inertia, friction, offset and springs.
+    pub joint_terms: Vec<JointTerms>,
+    /// How it was chosen and what it is expected to get wrong.
+    pub summary: IdentificationSummary,
+}
+
+/// What identification chose and measured on held-out motion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IdentificationSummary {
+    /// Where settings were chosen and errors measured.
+    pub held_out: String,
+    /// The ridge weight toward the URDF (relative to each column's scale).
+    pub ridge: f64,
+    /// Per joint: whether it kept spring terms.
+    pub springs: Vec<bool>,
+    /// Bodies moved onto the physically possible set after the fit.
+    pub projected_bodies: Vec<usize>,
+    /// Expected false torque on motion not trained on, rms per joint (N m).
+    pub expected_false_torque_rms: Vec<f64>,
+    /// The URDF's own rms per joint on the same held-out motion (N m).
+    pub prior_false_torque_rms: Vec<f64>,
+    /// Number of base parameters (identifiable combinations of the inertial ones).
+    pub base_parameters: usize,
+    /// Condition number of the training motion's base regressor (columns at unit norm).
+    pub condition_number: f64,
+    /// Training samples.
+    pub training_samples: usize,
+    /// Validation samples (0: blocked cross-validation).
+    pub validation_samples: usize,
+    /// The settings used.
+    pub settings: IdentificationSettings,
+}
+
+/// Per-joint rms errors of a model on samples.
+pub(crate) struct JointErrors {
+    pub rms: Vec<f64>,
+}
+
+impl Identification {
+    /// A plain rigid-body model as a nominal model: no joint terms (what a URDF alone
+    /// says), so that every consumer of a nominal model takes either.
+    pub fn from_model(model: Model) -> Self {
+        let n = model.nq();
+        let none = JointTerms { coulomb_width: IdentificationSettings::default().coulomb_width, ..Default::default() };
+        Identification { model, joint_terms: vec![none; n], summary: IdentificationSummary::empty(n) }
+    }
+
+    /// Whether any joint term is non-zero (an identification, not a bare URDF model).
+    pub fn has_joint_terms(&self) -> bool {
+        self.joint_terms.iter().any(|t| {
+            t.armature != 0.0 || t.viscous != 0.0 || t.coulomb != 0.0 || t.offset != 0.0 || t.spring.iter().any(|k| *k != 0.0)
+        })
+    }
+
+    /// Replaces each row's torque by what this model does not explain: `tau -
+    /// predict(q, q', q'')`, with rows `[q, q', q'']` (3 n per row) in `inputs` and `n` per
+    /// row in `torques`: the target of a residual network.
+    pub fn subtract_from(&self, inputs: &[f64], torques: &mut [f64]) -> Result<(), DimensionError> {
+        let n = self.model.nq();
+        let mut data = Data::new(&self.model);
+        let mut out = vec![0.0; n];
+        for (row, target) in inputs.chunks_exact(3 * n).zip(torques.chunks_exact_mut(n)) {
+            self.predict(&mut data, &row[..n], &row[n..2 * n], &row[2 * n..], &mut out)?;
+            target.iter_mut().zip(&out).for_each(|(t, m)| *t -= m);
+        }
+        Ok(())
+    }
+
+    /// From a solution vector `[10 n inertial | 7 per joint]`.
+    pub(crate) fn from_solution(model: &Model, x: &nalgebra::DVector<f64>, width: f64) -> Result<Self, DynamicsError> {
+        let n = model.nq();
+        let split = PARAMETERS_PER_BODY * n;
+        let identified = with_inertial_parameters(model, &x.as_slice()[..split])?;
+        let joint_terms = x.as_slice()[split..]
+            .chunks_exact(joint_terms::JOINT_FEATURES)
+            .map(|c| JointTerms::from_coefficients(c, width))
+            .collect();
+        Ok(Identification { model: identified, joint_terms, summary: IdentificationSummary::empty(n) })
+    }
+
+    /// The torque the identified arm needs for `(q, q', q'')` (N m), into `out`: RNEA on
+    /// the identified model plus each joint's terms. Allocation-free.
+    pub fn predict(&self, data: &mut Data, q: &[f64], qdot: &[f64], qddot: &[f64], out: &mut [f64]) -> Result<(), DimensionError> {
+        check_len("out", out, self.model.nq())?;
+        let tau = rnea(&self.model, data, q, qdot, qddot)?;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = tau[i] + self.joint_terms[i].torque(q[i], qdot[i], qddot[i]);
+        }
+        Ok(())
+    }
+
+    /// Each joint's friction, offset and springs at `(q, q')` (no rotor inertia), into
+    /// `out`: what a momentum observer subtracts besides gravity. Allocation-free.
+    pub fn joint_friction_torque(&self, q: &[f64], qdot: &[f64], out: &mut [f64]) -> Result<(), DimensionError> {
+        let n = self.model.nq();
+        check_len("q", q, n)?;
+        check_len("qdot", qdot, n)?;
+        check_len("out", out, n)?;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.joint_terms[i].velocity_and_position_torque(q[i], qdot[i]);
+        }
+        Ok(())
+    }
+
+    /// The rotor inertia of each joint (kg m^2).
+    pub fn armature(&self) -> impl Iterator<Item = f64> + '_ {
+        self.joint_terms.iter().map(|t| t.armature)
+    }
+
+    pub(crate) fn joint_errors(&self, samples: &Samples) -> Result<JointErrors, DynamicsError> {
+        let n = self.model.nq();
+        let mut data = Data::new(&self.model);
+        let mut out = vec![0.0; n];
+        let mut sq = vec![0.0; n];
+        for k in 0..samples.len() {
+            let (q, qd, qdd, tau) = samples.row(k);
+            self.predict(&mut data, q, qd, qdd, &mut out)?;
+            for i in 0..n {
+                sq[i] += (out[i] - tau[i]).powi(2);
+            }
+        }
+        let len = samples.len().max(1) as f64;
+        Ok(JointErrors { rms: sq.iter().map(|s| (s / len).sqrt()).collect() })
+    }
+}
+
+impl IdentificationSummary {
+    fn empty(n: usize) -> Self {
+        IdentificationSummary {
+            held_out: String::new(),
+            ridge: 0.0,
+            springs: vec![false; n],
+            projected_bodies: Vec::new(),
+            expected_false_torque_rms: Vec::new(),
+            prior_false_torque_rms: Vec::new(),
+            base_parameters: 0,
+            condition_number: f64::NAN,
+            training_samples: 0,
+            validation_samples: 0,
+            settings: IdentificationSettings::default(),
+        }
+    }
+}
+
+impl<'a> Samples<'a> {
+    /// Samples `start..end`.
+    pub fn slice(&self, start: usize, end: usize) -> Samples<'a> {
+        let r = start * self.dof..end * self.dof;
+        Samples { q: &self.q[r.clone()], qdot: &self.qdot[r.clone()], qddot: &self.qddot[r.clone()], tau: &self.tau[r], dof: self.dof }
+    }
+}
+
+#[allow(dead_code)]
+fn _assert_send(i: Identification) -> impl Send + Sync {
+    i
+}

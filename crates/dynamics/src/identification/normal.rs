@@ -1,0 +1,140 @@
+//! Normal equations of the identification least squares, accumulated per contiguous block
+//! of samples, so that every candidate setting (ridge, spring terms) and every held-out
+//! block is scored without touching the samples again.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::algorithms::regressor::{joint_torque_regressor, PARAMETERS_PER_BODY};
+use crate::data::Data;
+use crate::error::DynamicsError;
+use crate::identification::joint_terms::{features, JOINT_FEATURES};
+use crate::identification::samples::Samples;
+use crate::model::Model;
+
+/// Samples stacked per product (rows of `W`), to multiply in blocks.
+const BATCH: usize = 128;
+
+/// `W^T W`, `W^T y`, `y^T y` and the row count of one stretch of samples, for the columns
+/// `[10 n inertial | JOINT_FEATURES per joint]`.
+#[derive(Clone, Debug)]
+pub(crate) struct Normal {
+    pub gram: DMatrix<f64>,
+    pub rhs: DVector<f64>,
+    pub yy: f64,
+    pub rows: usize,
+}
+
+impl Normal {
+    pub fn zeros(p: usize) -> Self {
+        Normal { gram: DMatrix::zeros(p, p), rhs: DVector::zeros(p), yy: 0.0, rows: 0 }
+    }
+
+    pub fn add(&mut self, o: &Normal) {
+        self.gram += &o.gram;
+        self.rhs += &o.rhs;
+        self.yy += o.yy;
+        self.rows += o.rows;
+    }
+
+    pub fn sub(&mut self, o: &Normal) {
+        self.gram -= &o.gram;
+        self.rhs -= &o.rhs;
+        self.yy -= o.yy;
+        self.rows -= o.rows;
+    }
+
+    /// Sum of squared residuals of `x` on these rows.
+    pub fn squared_error(&self, x: &DVector<f64>) -> f64 {
+        (self.yy - 2.0 * x.dot(&self.rhs) + x.dot(&(&self.gram * x))).max(0.0)
+    }
+}
+
+/// Number of columns for an arm of `n` joints.
+pub(crate) fn columns(n: usize) -> usize {
+    (PARAMETERS_PER_BODY + JOINT_FEATURES) * n
+}
+
+/// Fills `row_block` (n x columns) with the regression rows of one sample.
+pub(crate) fn sample_rows(
+    model: &Model,
+    data: &mut Data,
+    samples: &Samples,
+    k: usize,
+    width: f64,
+    out: &mut nalgebra::DMatrixViewMut<f64>,
+) -> Result<(), DynamicsError> {
+    let n = model.nq();
+    let (q, qd, qdd, _) = samples.row(k);
+    let y = joint_torque_regressor(model, data, q, qd, qdd)?;
+    out.view_mut((0, 0), (n, PARAMETERS_PER_BODY * n)).copy_from(y);
+    out.view_mut((0, PARAMETERS_PER_BODY * n), (n, JOINT_FEATURES * n)).fill(0.0);
+    let mut f = [0.0; JOINT_FEATURES];
+    for i in 0..n {
+        features(q[i], qd[i], qdd[i], width, &mut f);
+        for (c, v) in f.iter().enumerate() {
+            out[(i, PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + c)] = *v;
+        }
+    }
+    Ok(())
+}
+
+/// The normal equations of `blocks` contiguous stretches of `samples` (the last takes the
+/// remainder).
+pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: usize) -> Result<Vec<Normal>, DynamicsError> {
+    let n = model.nq();
+    let p = columns(n);
+    let len = samples.len();
+    let mut data = Data::new(model);
+    let mut w = DMatrix::zeros(BATCH * n, p);
+    let mut y = DVector::zeros(BATCH * n);
+    let mut out = Vec::with_capacity(blocks);
+    for b in 0..blocks {
+        let (start, end) = (b * len / blocks, (b + 1) * len / blocks);
+        let mut normal = Normal::zeros(p);
+        let mut k = start;
+        while k < end {
+            let m = (end - k).min(BATCH);
+            for s in 0..m {
+                sample_rows(model, &mut data, samples, k + s, width, &mut w.view_mut((s * n, 0), (n, p)))?;
+                y.rows_mut(s * n, n).copy_from_slice(samples.row(k + s).3);
+            }
+            let wb = w.rows(0, m * n);
+            let yb = y.rows(0, m * n);
+            normal.gram.gemm_tr(1.0, &wb, &wb, 1.0);
+            normal.rhs.gemv_tr(1.0, &wb, &yb, 1.0);
+            normal.yy += yb.norm_squared();
+            normal.rows += m * n;
+            k += m;
+        }
+        out.push(normal);
+    }
+    Ok(out)
+}
+
+/// Ridge solution on the `active` columns, pulled toward `prior` with weight `ridge`
+/// relative to each column's own scale (`ridge * G_cc`); inactive columns stay at the
+/// prior. Columns that carry nothing stay at the prior too.
+pub(crate) fn solve(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> Option<DVector<f64>> {
+    let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
+    let floor = 1e-12 * idx.iter().map(|&c| normal.gram[(c, c)]).fold(0.0, f64::max).max(1e-300);
+    let m = idx.len();
+    let mut a = DMatrix::from_fn(m, m, |r, c| normal.gram[(idx[r], idx[c])]);
+    let mut rhs = DVector::from_fn(m, |r, _| normal.rhs[idx[r]]);
+    // Inactive columns held at the prior move to the right-hand side.
+    for (r, &cr) in idx.iter().enumerate() {
+        for c in 0..active.len() {
+            if !active[c] && prior[c] != 0.0 {
+                rhs[r] -= normal.gram[(cr, c)] * prior[c];
+            }
+        }
+        let d = ridge * normal.gram[(cr, cr)] + floor;
+        a[(r, r)] += d;
+        rhs[r] += d * prior[cr];
+    }
+    let sol = a.cholesky()?.solve(&rhs);
+    let mut x = prior.clone();
+    for (r, &c) in idx.iter().enumerate() {
+        x[c] = sol[r];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
