@@ -15,6 +15,8 @@
 //! and how to fix it.
 
 mod dynamics_cmd;
+mod evaluate_cmd;
+mod identify_cmd;
 mod list_cmd;
 mod progress;
 mod report_cmd;
@@ -50,6 +52,10 @@ enum Command {
     Train(train_cmd::TrainArgs),
     /// Add nodes to a trained network (incremental growth) and save the result.
     Grow(train_cmd::GrowArgs),
+    /// Identify the arm's inertial parameters and joint friction from free motion.
+    Identify(identify_cmd::IdentifyArgs),
+    /// Run every estimator the given files allow over a free-motion recording and print its false torque.
+    Evaluate(evaluate_cmd::EvaluateArgs),
 }
 
 /// A failure with its exit code and a short message.
@@ -120,6 +126,8 @@ fn main() -> ExitCode {
         Command::Report(args) => report_cmd::report(&args),
         Command::Train(args) => train_cmd::train(&args),
         Command::Grow(args) => train_cmd::grow(&args),
+        Command::Identify(args) => identify_cmd::identify_cmd(&args),
+        Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,9 @@
 mod args;
 mod data;
 
+pub use args::{non_negative_hz, positive_number};
+pub use data::load as load_data;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -24,7 +27,7 @@ use clap::Args;
 use crate::progress::{self, Spinner};
 use crate::CliError;
 use args::{
-    arm_identity, check_out, learn_error, non_negative_hz, open_fraction, positive_count,
+    arm_identity, check_out, learn_error, open_fraction, positive_count,
     BudgetArgs, OptionalArmArgs,
 };
 

@@ -22,7 +22,7 @@
 
 use std::sync::Arc;
 
-use admittance_dynamics::{momentum_observer_terms, Data, Model};
+use admittance_dynamics::{momentum_observer_terms, Data, Identification, JointTerms, Model};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{Bound, JointValues};
@@ -67,6 +67,8 @@ pub struct MomentumObserver {
     model_terms_prev: Vec<f64>,
     p: Vec<f64>,
     model_terms: Vec<f64>,
+    /// Identified per-joint terms (rotor inertia, friction, offset, springs), or none.
+    joint_terms: Vec<JointTerms>,
     started: bool,
 }
 
@@ -86,8 +88,26 @@ impl MomentumObserver {
             model_terms_prev: vec![0.0; n],
             p: vec![0.0; n],
             model_terms: vec![0.0; n],
+            joint_terms: Vec::new(),
             started: false,
         })
+    }
+
+    /// An observer on an identified arm: its rigid-body model, and each joint's rotor
+    /// inertia (in the momentum, `p = (M + I_a) q'`) and friction, offset and springs
+    /// (subtracted like gravity), so that what it reports is the external torque only.
+    pub fn from_identification(
+        identification: &Identification,
+        config: &MomentumObserverConfig,
+    ) -> Result<Self, ConfigError> {
+        let mut observer = Self::new(Arc::new(identification.model.clone()), config)?;
+        observer.joint_terms = identification.joint_terms.clone();
+        Ok(observer)
+    }
+
+    /// The identified joint terms (empty for a plain rigid-body nominal model).
+    pub fn joint_terms(&self) -> &[JointTerms] {
+        &self.joint_terms
     }
 
     /// The gains `K_O`.
@@ -109,6 +129,10 @@ impl MomentumObserver {
         for (i, (p, terms)) in self.p.iter_mut().zip(&mut self.model_terms).enumerate() {
             *p = d.momentum[i];
             *terms = d.coriolis_transpose_v[i] - d.gravity_torque[i];
+        }
+        for (i, joint) in self.joint_terms.iter().enumerate() {
+            self.p[i] += joint.armature * qdot[i];
+            self.model_terms[i] -= joint.velocity_and_position_torque(q[i], qdot[i]);
         }
         Ok(())
     }

@@ -40,10 +40,10 @@ fn truth_terms(n: usize) -> Vec<JointTerms> {
         .map(|i| JointTerms {
             armature: 0.05 + 0.01 * i as f64,
             viscous: 1.0 + 0.2 * i as f64,
-            coulomb: 2.0 - 0.1 * i as f64,
-            coulomb_width: 0.05,
+            coulomb: [2.0 - 0.1 * i as f64, 0.5],
+            coulomb_width: 0.01,
             offset: 0.3 * (i as f64 - 3.0),
-            spring: if i == 1 { [0.0, 0.0, 8.0] } else { [0.0; 3] },
+            spring: if i == 1 { [0.0, 8.0, 0.0, -2.0] } else { [0.0; 4] },
         })
         .collect()
 }
@@ -72,7 +72,7 @@ fn recovers_an_arm_on_motion_it_never_saw() {
     // The truth: heavier links than the URDF says, and friction, springs, rotor inertia.
     let truth = urdf.with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1]).unwrap();
     let terms = truth_terms(7);
-    let (q, qd, qdd) = motion(&urdf, 0.3, 60.0);
+    let (q, qd, qdd) = motion(&urdf, 0.3, 30.0);
     let tau = torques(&truth, &terms, &q, &qd, &qdd);
     let train = Samples { q: &q, qdot: &qd, qddot: &qdd, tau: &tau, dof: 7 };
     let ident = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
@@ -87,12 +87,14 @@ fn recovers_an_arm_on_motion_it_never_saw() {
         ident.predict(&mut data, &q2[r.clone()], &qd2[r.clone()], &qdd2[r.clone()], &mut out).unwrap();
         pred.extend_from_slice(&out);
     }
-    let urdf_pred = torques(&urdf, &vec![JointTerms { coulomb_width: 0.05, ..Default::default() }; 7], &q2, &qd2, &qdd2);
+    let urdf_pred = torques(&urdf, &vec![JointTerms { coulomb_width: 0.01, ..Default::default() }; 7], &q2, &qd2, &qdd2);
     let (ours, prior) = (rms(&pred, &tau2), rms(&urdf_pred, &tau2));
     eprintln!("new motion rms: identified {ours:.4} N m, URDF {prior:.3} N m; {:?}", ident.summary);
     assert!(ours < 0.02 * prior, "identified {ours} vs URDF {prior}");
     assert!(ident.summary.springs[1], "joint 1's spring was found: {:?}", ident.summary.springs);
-    assert!(ident.model.bodies.iter().all(is_physically_consistent));
+    for (b, body) in ident.model.bodies.iter().enumerate() {
+        assert!(is_physically_consistent(body), "body {b}: {body:?}");
+    }
     assert!(ident.summary.expected_false_torque_rms.iter().all(|e| *e < 0.1), "{:?}", ident.summary.expected_false_torque_rms);
     assert!(ident.summary.base_parameters > 7 && ident.summary.base_parameters < 70);
 }

@@ -7,7 +7,7 @@ use nalgebra::DVector;
 use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
 use crate::error::DynamicsError;
 use crate::identification::base::BaseParameters;
-use crate::identification::consistency::project;
+use crate::identification::constrained::solve_consistent;
 use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
 use crate::identification::normal::{accumulate, columns, solve, Normal};
 use crate::identification::samples::Samples;
@@ -26,11 +26,29 @@ enum Held<'a> {
     Folds { blocks: Vec<Normal>, total: Normal },
 }
 
+/// The least-squares solution on `normal` with these columns and ridge: over physically
+/// possible bodies only, or unconstrained.
+#[derive(Clone, Copy)]
+struct Fitter {
+    physical: bool,
+    bodies: usize,
+}
+
+impl Fitter {
+    fn fit(&self, normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> Option<DVector<f64>> {
+        if self.physical {
+            solve_consistent(normal, active, prior, ridge, self.bodies)
+        } else {
+            solve(normal, active, prior, ridge)
+        }
+    }
+}
+
 impl Held<'_> {
     /// Mean squared error on held-out motion of the fit with these columns and ridge.
-    fn score(&self, active: &[bool], prior: &DVector<f64>, ridge: f64) -> f64 {
+    fn score(&self, fitter: Fitter, active: &[bool], prior: &DVector<f64>, ridge: f64) -> f64 {
         match self {
-            Held::Recording { train, validation, .. } => match solve(train, active, prior, ridge) {
+            Held::Recording { train, validation, .. } => match fitter.fit(train, active, prior, ridge) {
                 Some(x) => validation.squared_error(&x) / validation.rows as f64,
                 None => f64::INFINITY,
             },
@@ -39,7 +57,7 @@ impl Held<'_> {
                 for b in blocks {
                     let mut rest = total.clone();
                     rest.sub(b);
-                    match solve(&rest, active, prior, ridge) {
+                    match fitter.fit(&rest, active, prior, ridge) {
                         Some(x) => sse += b.squared_error(&x),
                         None => return f64::INFINITY,
                     }
@@ -85,22 +103,23 @@ pub fn identify(
         }
     }
     let width = settings.coulomb_width;
+    let p = columns(n);
+    let mut prior = DVector::zeros(p);
+    prior.rows_mut(0, PARAMETERS_PER_BODY * n).copy_from_slice(&inertial_parameters(model));
+    let weights = joint_weights(model, train, width, settings.friction, &prior)?;
     let held = match validation {
         Some(v) => Held::Recording {
-            train: accumulate(model, train, width, 1)?.remove(0),
-            validation: accumulate(model, v, width, 1)?.remove(0),
+            train: accumulate(model, train, width, 1, &weights)?.remove(0),
+            validation: accumulate(model, v, width, 1, &weights)?.remove(0),
             samples: *v,
         },
         None => {
-            let blocks = accumulate(model, train, width, settings.folds)?;
+            let blocks = accumulate(model, train, width, settings.folds, &weights)?;
             let mut total = Normal::zeros(columns(n));
             blocks.iter().for_each(|b| total.add(b));
             Held::Folds { blocks, total }
         }
     };
-    let p = columns(n);
-    let mut prior = DVector::zeros(p);
-    prior.rows_mut(0, PARAMETERS_PER_BODY * n).copy_from_slice(&inertial_parameters(model));
     let joint_col = |i: usize, f: usize| PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + f;
     let mut active: Vec<bool> = (0..p).map(|c| c < PARAMETERS_PER_BODY * n || settings.friction).collect();
     for i in 0..n {
@@ -108,11 +127,12 @@ pub fn identify(
             active[joint_col(i, f)] = false;
         }
     }
+    let fitter = Fitter { physical: settings.physical_consistency, bodies: n };
     let choose_ridge = |active: &[bool]| -> (f64, f64) {
         match settings.ridge {
-            Some(r) => (r, held.score(active, &prior, r)),
+            Some(r) => (r, held.score(fitter, active, &prior, r)),
             None => ridge_grid()
-                .map(|r| (r, held.score(active, &prior, r)))
+                .map(|r| (r, held.score(fitter, active, &prior, r)))
                 .fold((f64::NAN, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best }),
         }
     };
@@ -122,7 +142,7 @@ pub fn identify(
         for i in 0..n {
             let mut trial = active.clone();
             (FIRST_SPRING_FEATURE..JOINT_FEATURES).for_each(|f| trial[joint_col(i, f)] = true);
-            let score = held.score(&trial, &prior, ridge);
+            let score = held.score(fitter, &trial, &prior, ridge);
             if score < 0.99 * best {
                 active = trial;
                 best = score;
@@ -139,8 +159,14 @@ pub fn identify(
         ));
     }
     let fit = |normal: &Normal| -> Result<(DVector<f64>, Vec<usize>), DynamicsError> {
-        let x = solve(normal, &active, &prior, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular".into()))?;
-        if settings.physical_consistency { consistent(normal, &active, &prior, ridge, x, n) } else { Ok((x, Vec::new())) }
+        let x = fitter.fit(normal, &active, &prior, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular".into()))?;
+        // Bodies the unconstrained fit would have made impossible (the constrained fit
+        // keeps them possible; listed so that a user sees where the data disagree).
+        let impossible = match solve(normal, &active, &prior, ridge) {
+            Some(free) if settings.physical_consistency => (0..n).filter(|&b| !body_possible(&free, b)).collect(),
+            _ => Vec::new(),
+        };
+        Ok((x, impossible))
     };
     let (x, projected) = fit(held.all_training())?;
     let identified = Identification::from_solution(model, &x, width)?;
@@ -190,31 +216,24 @@ pub fn identify(
     Ok(Identification { summary, ..identified })
 }
 
-/// Projects every body onto the physically possible ones, then refits the joint terms
-/// with the bodies held. Returns the solution and the bodies that moved.
-fn consistent(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64, mut x: DVector<f64>, n: usize) -> Result<(DVector<f64>, Vec<usize>), DynamicsError> {
-    let mut moved = Vec::new();
-    for b in 0..n {
-        let r = b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY;
-        let mut p = [0.0; PARAMETERS_PER_BODY];
-        p.copy_from_slice(&x.as_slice()[r.clone()]);
-        let q = project(&p).unwrap_or_else(|| {
-            let mut prior_body = [0.0; PARAMETERS_PER_BODY];
-            prior_body.copy_from_slice(&prior.as_slice()[r.clone()]);
-            prior_body
-        });
-        if q != p {
-            moved.push(b);
-            x.rows_mut(r.start, PARAMETERS_PER_BODY).copy_from_slice(&q);
-        }
-    }
-    if moved.is_empty() {
-        return Ok((x, moved));
-    }
-    // Bodies held at their projected values: they act as a prior with no freedom.
-    let joint_only: Vec<bool> = (0..active.len()).map(|c| c >= PARAMETERS_PER_BODY * n && active[c]).collect();
-    let refit = solve(normal, &joint_only, &x, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: refitting the joint terms failed".into()))?;
-    Ok((refit, moved))
+/// Each joint's weight in the least squares: one over its residual rms after a plain
+/// fit (weighted least squares: a joint with small torques counts as much as one with
+/// large torques, relative to how well it can be explained).
+fn joint_weights(model: &Model, train: &Samples, width: f64, friction: bool, prior: &DVector<f64>) -> Result<Vec<f64>, DynamicsError> {
+    let n = model.nq();
+    let ones = vec![1.0; n];
+    let normal = accumulate(model, train, width, 1, &ones)?.remove(0);
+    let active: Vec<bool> = (0..prior.len()).map(|c| c < PARAMETERS_PER_BODY * n || (friction && (c - PARAMETERS_PER_BODY * n) % JOINT_FEATURES < FIRST_SPRING_FEATURE)).collect();
+    let x = solve(&normal, &active, prior, 1e-6).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular (does the recording move every joint?)".into()))?;
+    let rms = Identification::from_solution(model, &x, width)?.joint_errors(train)?.rms;
+    let largest = rms.iter().copied().fold(0.0, f64::max);
+    Ok(rms.iter().map(|r| 1.0 / r.max(1e-3 * largest).max(1e-12)).collect())
+}
+
+fn body_possible(x: &DVector<f64>, b: usize) -> bool {
+    let mut p = [0.0; PARAMETERS_PER_BODY];
+    p.copy_from_slice(&x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+    crate::identification::consistency::is_physically_consistent(&crate::spatial::Inertia::from_parameters(&p))
 }
 
 /// Condition number of the training data's base regressor, from the Gram matrix of its

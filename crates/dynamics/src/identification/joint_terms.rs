@@ -2,19 +2,25 @@
 //! springs (docs/method.md section 1, the friction term `F` of eq. 1, here identified).
 //!
 //! ```text
-//!   tau_joint = I_a q'' + F_v q' + F_c tanh(q' / w) + tau_0 + k_1 q + k_s sin q + k_c cos q
+//!   tau_joint = I_a q'' + F_v q' + F_c1 tanh(q' / w) + F_c2 tanh(q' / 10 w) + tau_0
+//!             + k_1 sin q + k_2 cos q + k_3 sin 2q + k_4 cos 2q
 //! ```
 //!
 //! `tanh(q' / w)` is a smooth sign (width `w` in rad/s): Coulomb friction without the jump
-//! at rest that no filter or integrator handles well. The spring terms stand for what a
-//! URDF does not describe (Baxter's gravity-assist spring on s1, cable and hose forces).
+//! at rest that no filter or integrator handles well; the second, ten times wider, lets
+//! the friction curve bend near rest as Stribeck friction does (Gaz et al. 2019 fit a
+//! sigmoid for the same reason). The spring terms, a Fourier series of order 2 in the
+//! joint's own angle, stand for what a URDF does not describe (Baxter's gravity-assist
+//! spring on s1, cable and hose forces).
 
 use serde::{Deserialize, Serialize};
 
 /// Number of per-joint features (regressor columns) of [`JointTerms`].
-pub(crate) const JOINT_FEATURES: usize = 7;
+pub(crate) const JOINT_FEATURES: usize = 9;
 /// Index of the first spring feature.
-pub(crate) const FIRST_SPRING_FEATURE: usize = 4;
+pub(crate) const FIRST_SPRING_FEATURE: usize = 5;
+/// How much wider the second smooth sign is than the first.
+const SECOND_WIDTH: f64 = 10.0;
 
 /// The identified terms of one joint (SI units: N m, or N for a prismatic joint).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -23,14 +29,15 @@ pub struct JointTerms {
     pub armature: f64,
     /// Viscous friction `F_v` (N m s/rad).
     pub viscous: f64,
-    /// Coulomb friction level `F_c` (N m).
-    pub coulomb: f64,
-    /// Width `w` of the smooth sign (rad/s).
+    /// Coulomb friction levels `[F_c1, F_c2]` of the smooth signs of width `w` and `10 w`
+    /// (N m).
+    pub coulomb: [f64; 2],
+    /// Width `w` of the narrower smooth sign (rad/s).
     pub coulomb_width: f64,
     /// Constant offset `tau_0` (N m): sensor bias or a constant load.
     pub offset: f64,
-    /// Spring terms `[k_1, k_s, k_c]` on `q`, `sin q`, `cos q` (N m/rad, N m, N m).
-    pub spring: [f64; 3],
+    /// Spring terms `[k_1 .. k_4]` on `sin q`, `cos q`, `sin 2q`, `cos 2q` (N m).
+    pub spring: [f64; 4],
 }
 
 impl JointTerms {
@@ -45,7 +52,8 @@ impl JointTerms {
     pub fn velocity_and_position_torque(&self, q: f64, qd: f64) -> f64 {
         let mut f = [0.0; JOINT_FEATURES];
         features(q, qd, 0.0, self.coulomb_width, &mut f);
-        self.viscous * f[1] + self.coulomb * f[2] + self.offset * f[3] + self.spring[0] * f[4] + self.spring[1] * f[5] + self.spring[2] * f[6]
+        let c = self.coefficients();
+        c[1..].iter().zip(&f[1..]).map(|(c, f)| c * f).sum()
     }
 
     /// From fitted coefficients in feature order.
@@ -53,23 +61,35 @@ impl JointTerms {
         JointTerms {
             armature: c[0],
             viscous: c[1],
-            coulomb: c[2],
+            coulomb: [c[2], c[3]],
             coulomb_width,
-            offset: c[3],
-            spring: [c[4], c[5], c[6]],
+            offset: c[4],
+            spring: [c[5], c[6], c[7], c[8]],
         }
+    }
+
+    /// The coefficients in feature order.
+    fn coefficients(&self) -> [f64; JOINT_FEATURES] {
+        let (c, s) = (&self.coulomb, &self.spring);
+        [self.armature, self.viscous, c[0], c[1], self.offset, s[0], s[1], s[2], s[3]]
+    }
+
+    /// Whether any term is non-zero.
+    pub fn is_zero(&self) -> bool {
+        self.coefficients().iter().all(|c| *c == 0.0)
     }
 
     /// All coefficients finite and the width positive.
     pub(crate) fn is_valid(&self) -> bool {
-        let c = [self.armature, self.viscous, self.coulomb, self.offset, self.spring[0], self.spring[1], self.spring[2]];
-        c.iter().all(|v| v.is_finite()) && self.coulomb_width.is_finite() && self.coulomb_width > 0.0
+        self.coefficients().iter().all(|v| v.is_finite()) && self.coulomb_width.is_finite() && self.coulomb_width > 0.0
     }
 }
 
-/// The features `[q'', q', tanh(q'/w), 1, q, sin q, cos q]` of one joint at one sample.
+/// The features `[q'', q', tanh(q'/w), tanh(q'/10w), 1, sin q, cos q, sin 2q, cos 2q]` of
+/// one joint at one sample.
 #[inline]
 pub(crate) fn features(q: f64, qd: f64, qdd: f64, width: f64, out: &mut [f64; JOINT_FEATURES]) {
     let (s, c) = q.sin_cos();
-    *out = [qdd, qd, (qd / width).tanh(), 1.0, q, s, c];
+    // sin 2q and cos 2q from sin q and cos q: one sin_cos call per sample.
+    *out = [qdd, qd, (qd / width).tanh(), (qd / (SECOND_WIDTH * width)).tanh(), 1.0, s, c, 2.0 * s * c, c * c - s * s];
 }

@@ -14,6 +14,7 @@
 
 mod base;
 mod consistency;
+mod constrained;
 mod file;
 mod fit;
 mod joint_terms;
@@ -58,7 +59,8 @@ pub struct IdentificationSummary {
     pub ridge: f64,
     /// Per joint: whether it kept spring terms.
     pub springs: Vec<bool>,
-    /// Bodies moved onto the physically possible set after the fit.
+    /// Bodies that an unconstrained fit would have made physically impossible (the fit
+    /// kept them possible): where the data and rigid-body physics disagree.
     pub projected_bodies: Vec<usize>,
     /// Expected false torque on motion not trained on, rms per joint (N m).
     pub expected_false_torque_rms: Vec<f64>,
@@ -92,9 +94,7 @@ impl Identification {
 
     /// Whether any joint term is non-zero (an identification, not a bare URDF model).
     pub fn has_joint_terms(&self) -> bool {
-        self.joint_terms.iter().any(|t| {
-            t.armature != 0.0 || t.viscous != 0.0 || t.coulomb != 0.0 || t.offset != 0.0 || t.spring.iter().any(|k| *k != 0.0)
-        })
+        self.joint_terms.iter().any(|t| !t.is_zero())
     }
 
     /// Replaces each row's torque by what this model does not explain: `tau -

@@ -79,8 +79,8 @@ pub(crate) fn sample_rows(
 }
 
 /// The normal equations of `blocks` contiguous stretches of `samples` (the last takes the
-/// remainder).
-pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: usize) -> Result<Vec<Normal>, DynamicsError> {
+/// remainder), each joint's rows multiplied by its weight.
+pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: usize, weights: &[f64]) -> Result<Vec<Normal>, DynamicsError> {
     let n = model.nq();
     let p = columns(n);
     let len = samples.len();
@@ -97,6 +97,10 @@ pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: u
             for s in 0..m {
                 sample_rows(model, &mut data, samples, k + s, width, &mut w.view_mut((s * n, 0), (n, p)))?;
                 y.rows_mut(s * n, n).copy_from_slice(samples.row(k + s).3);
+                for (i, wi) in weights.iter().enumerate() {
+                    w.row_mut(s * n + i).scale_mut(*wi);
+                    y[s * n + i] *= wi;
+                }
             }
             let wb = w.rows(0, m * n);
             let yb = y.rows(0, m * n);
@@ -111,12 +115,29 @@ pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: u
     Ok(out)
 }
 
+/// The ridge weight of a column: `ridge` for the inertial parameters (pulled toward the
+/// URDF), a negligible one for the joint terms (no prior knowledge to pull toward).
+pub(crate) fn ridge_weight(column: usize, columns: usize, ridge: f64) -> f64 {
+    let inertial = columns / (PARAMETERS_PER_BODY + JOINT_FEATURES) * PARAMETERS_PER_BODY;
+    if column < inertial { ridge } else { 1e-9 }
+}
+
+/// Each column's scale in the ridge penalty: its mean square on these rows, floored at
+/// 1e-4 of the median over the active columns, so that a column the motion barely excites
+/// is held at the prior instead of taking absurd values.
+pub(crate) fn column_scales(normal: &Normal, active: &[bool]) -> Vec<f64> {
+    let mut diag: Vec<f64> = (0..active.len()).filter(|&c| active[c]).map(|c| normal.gram[(c, c)]).collect();
+    diag.sort_by(f64::total_cmp);
+    let median = diag.get(diag.len() / 2).copied().unwrap_or(0.0);
+    (0..active.len()).map(|c| normal.gram[(c, c)].max(1e-4 * median).max(1e-300)).collect()
+}
+
 /// Ridge solution on the `active` columns, pulled toward `prior` with weight `ridge`
 /// relative to each column's own scale (`ridge * G_cc`); inactive columns stay at the
 /// prior. Columns that carry nothing stay at the prior too.
 pub(crate) fn solve(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> Option<DVector<f64>> {
     let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
-    let floor = 1e-12 * idx.iter().map(|&c| normal.gram[(c, c)]).fold(0.0, f64::max).max(1e-300);
+    let scales = column_scales(normal, active);
     let m = idx.len();
     let mut a = DMatrix::from_fn(m, m, |r, c| normal.gram[(idx[r], idx[c])]);
     let mut rhs = DVector::from_fn(m, |r, _| normal.rhs[idx[r]]);
@@ -127,7 +148,7 @@ pub(crate) fn solve(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridg
                 rhs[r] -= normal.gram[(cr, c)] * prior[c];
             }
         }
-        let d = ridge * normal.gram[(cr, cr)] + floor;
+        let d = ridge_weight(cr, active.len(), ridge) * scales[cr];
         a[(r, r)] += d;
         rhs[r] += d * prior[cr];
     }

@@ -11,9 +11,10 @@ pub struct IdentificationSettings {
     /// Fit per-joint rotor inertia, viscous and Coulomb friction and an offset
     /// ([`crate::JointTerms`]). Default true.
     pub friction: bool,
-    /// Width of the Coulomb friction's smooth sign `tanh(q' / w)` (rad/s). Default 0.05.
+    /// Width of the Coulomb friction's narrower smooth sign `tanh(q' / w)` (rad/s); the
+    /// second is 10 times wider. Default 0.01.
     pub coulomb_width: f64,
-    /// Offer each joint spring terms (`q`, `sin q`, `cos q`); each joint keeps them only
+    /// Offer each joint spring terms (`sin q`, `cos q`, `sin 2q`, `cos 2q`); each keeps them only
     /// where they lower the error on held-out motion by 1 % or more. Default true (needs
     /// `friction`).
     pub springs: bool,
@@ -23,9 +24,8 @@ pub struct IdentificationSettings {
     /// Ridge weight toward the prior (the URDF), relative to each column's scale; `None`
     /// (default): chosen on held-out motion from 1e-8 to 1e2.
     pub ridge: Option<f64>,
-    /// Project every body onto the physically possible ones (positive mass, positive
-    /// definite inertia obeying the triangle inequalities) and refit the joint terms.
-    /// Default true.
+    /// Fit over physically possible bodies only (positive mass, positive definite inertia
+    /// obeying the triangle inequalities: log-Cholesky coordinates). Default true.
     pub physical_consistency: bool,
 }
 
@@ -33,7 +33,7 @@ impl Default for IdentificationSettings {
     fn default() -> Self {
         IdentificationSettings {
             friction: true,
-            coulomb_width: 0.05,
+            coulomb_width: 0.01,
             springs: true,
             folds: 5,
             ridge: None,
@@ -47,7 +47,7 @@ impl IdentificationSettings {
     pub fn validate(&self) -> Result<(), DynamicsError> {
         let bad = |key: &str, m: String| Err(DynamicsError::InvalidArgument(format!("identification setting {key}: {m}")));
         if !(self.coulomb_width.is_finite() && self.coulomb_width > 0.0) {
-            return bad("coulomb_width", format!("is {}, must be a positive number of rad/s (default 0.05)", self.coulomb_width));
+            return bad("coulomb_width", format!("is {}, must be a positive number of rad/s (default 0.01)", self.coulomb_width));
         }
         if !(2..=50).contains(&self.folds) {
             return bad("folds", format!("is {}, must be 2 to 50 (default 5)", self.folds));

@@ -1,0 +1,168 @@
+//! `admittance identify`: the arm's inertial parameters and joint terms from free motion
+//! (docs/method.md section 1; docs/outputs.md, "Identification files"). Settings are
+//! chosen and the expected false torque measured on motion the fit did not see: the
+//! `--validation` recording, or contiguous stretches of the data held out in turn.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use admittance_dynamics::{identify, Identification, IdentificationSettings, Model, Samples};
+use admittance_scenario::FreeMotionData;
+use clap::Args;
+use serde_json::json;
+
+use crate::train_cmd::{non_negative_hz, positive_number};
+use crate::CliError;
+
+#[derive(Args)]
+pub struct IdentifyArgs {
+    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; docs/outputs.md).
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    chain: crate::dynamics_cmd::ChainArgs,
+    /// Another recording of other motion: settings are chosen and the expected error
+    /// measured on it (default: blocked cross-validation over contiguous stretches of --data).
+    #[arg(long)]
+    validation: Option<PathBuf>,
+    /// Use only the rows of --data with t < UNTIL (s): the rest is left for evaluation.
+    #[arg(long, value_parser = positive_number)]
+    until: Option<f64>,
+    /// Low-pass (Hz) on q and tau before differentiating, as the observers condition their
+    /// inputs at run time (`input_filter_hz`); 0: the columns as recorded.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
+    input_filter_hz: f64,
+    /// Fit the rigid-body parameters only (no rotor inertia, friction, offset or springs).
+    #[arg(long)]
+    no_friction: bool,
+    /// Do not offer spring terms.
+    #[arg(long)]
+    no_springs: bool,
+    /// Width of the Coulomb friction's narrower smooth sign tanh(qdot / w) (rad/s).
+    #[arg(long, default_value_t = 0.01, value_parser = positive_number)]
+    coulomb_width: f64,
+    /// Contiguous stretches for cross-validation (without --validation).
+    #[arg(long, default_value_t = 5)]
+    folds: usize,
+    /// Identification file to write (JSON): a new name or an identification file.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// The data's rows as identification samples, conditioned as at run time.
+pub struct Conditioned {
+    pub q: Vec<f64>,
+    pub qdot: Vec<f64>,
+    pub qddot: Vec<f64>,
+    pub tau: Vec<f64>,
+    pub dof: usize,
+}
+
+impl Conditioned {
+    pub fn new(path: &Path, data: &FreeMotionData, input_filter_hz: f64) -> Result<Self, CliError> {
+        let n = data.dof();
+        let (x, tau) = admittance_scenario::observer_training_arrays(data, input_filter_hz)
+            .map_err(|e| CliError::usage(format!("--input-filter-hz {input_filter_hz} with the data of {}: {e}", path.display())))?;
+        let (mut q, mut qdot, mut qddot) = (Vec::new(), Vec::new(), Vec::new());
+        for row in x.chunks_exact(3 * n) {
+            q.extend_from_slice(&row[..n]);
+            qdot.extend_from_slice(&row[n..2 * n]);
+            qddot.extend_from_slice(&row[2 * n..]);
+        }
+        Ok(Conditioned { q, qdot, qddot, tau, dof: n })
+    }
+
+    pub fn samples(&self) -> Samples<'_> {
+        Samples { q: &self.q, qdot: &self.qdot, qddot: &self.qddot, tau: &self.tau, dof: self.dof }
+    }
+}
+
+/// Rows with `t < until` (all without `until`); an error when that leaves too few.
+pub fn rows_until(path: &Path, data: &FreeMotionData, until: Option<f64>) -> Result<usize, CliError> {
+    let Some(until) = until else { return Ok(data.len()) };
+    let rows = data.t.iter().take_while(|t| **t < until).count();
+    if rows < 20 {
+        return Err(CliError::usage(format!("--until {until}: only {rows} rows of {} are before it", path.display())));
+    }
+    Ok(rows)
+}
+
+/// `--out` must be a new name or an identification file.
+fn check_out(path: &Path) -> Result<(), CliError> {
+    if path.is_dir() {
+        return Err(CliError::usage(format!("--out {}: is a folder; give a file name", path.display())));
+    }
+    if path.exists() && Identification::load_with_urdf(path).is_err() && !is_identification(path) {
+        return Err(CliError::usage(format!("--out {}: exists and is not an identification file; choose another name", path.display())));
+    }
+    Ok(())
+}
+
+fn is_identification(path: &Path) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|t| t.contains("\"format\": \"admittance-identification\""))
+}
+
+pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
+    check_out(&args.out)?;
+    if !(2..=50).contains(&args.folds) {
+        return Err(CliError::usage(format!("--folds {}: must be 2 to 50", args.folds)));
+    }
+    let arm = crate::dynamics_cmd::load(&args.chain)?;
+    let joints: Vec<String> = arm.joint_names().map(String::from).collect();
+    let data = crate::train_cmd::load_data(&args.data, Some(&joints))?;
+    let rows = rows_until(&args.data, &data, args.until)?;
+    let train = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
+    let validation = match &args.validation {
+        Some(p) => Some(Conditioned::new(p, &crate::train_cmd::load_data(p, Some(&joints))?, args.input_filter_hz)?),
+        None => None,
+    };
+    let settings = IdentificationSettings {
+        friction: !args.no_friction,
+        springs: !args.no_friction && !args.no_springs,
+        coulomb_width: args.coulomb_width,
+        folds: args.folds,
+        ..Default::default()
+    };
+    let samples = train.samples().slice(0, rows);
+    let started = std::time::Instant::now();
+    let ident = identify(&arm, &samples, validation.as_ref().map(|v| v.samples()).as_ref(), &settings)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.data.display())))?;
+    let mut provenance = BTreeMap::new();
+    provenance.insert("data".into(), json!(args.data.display().to_string()));
+    provenance.insert("rows".into(), json!(rows));
+    provenance.insert("until_s".into(), json!(args.until));
+    provenance.insert("validation".into(), json!(args.validation.as_ref().map(|p| p.display().to_string())));
+    provenance.insert("input_filter_hz".into(), json!(args.input_filter_hz));
+    ident.save(&args.out, &arm, provenance).map_err(|e| CliError { code: 1, message: e.to_string() })?;
+    crate::write_stdout(&report(&arm, &ident, started.elapsed().as_secs_f64(), &args.out));
+    Ok(())
+}
+
+/// The console table: per joint the URDF's and the identification's rms on held-out motion.
+fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> String {
+    let s = &ident.summary;
+    let mut text = format!(
+        "identified {} joints from {} samples in {seconds:.1} s; held out: {}\n\
+         ridge {:.1e}, {} base parameters, condition number {:.1}, bodies projected to physical: {:?}\n\
+         expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}\n",
+        arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
+        s.projected_bodies, "joint", "URDF", "identified", "springs"
+    );
+    let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    for (i, name) in arm.joint_names().enumerate() {
+        text += &format!(
+            "  {name:<16} {:>10.3} {:>12.3} {:>8}\n",
+            s.prior_false_torque_rms.get(i).copied().unwrap_or(f64::NAN),
+            s.expected_false_torque_rms[i],
+            if s.springs[i] { "yes" } else { "-" }
+        );
+    }
+    text += &format!(
+        "  {:<16} {:>10.3} {:>12.3}\nwrote {}\n",
+        "all joints",
+        total(&s.prior_false_torque_rms),
+        total(&s.expected_false_torque_rms),
+        out.display()
+    );
+    text
+}
