@@ -5,6 +5,12 @@ import sys
 
 from ._cosim import VARIANTS, CosimConfig, run_cosimulation
 
+#: What the co-simulation needs beyond the package, and the one line that says how to get it.
+MISSING_MUJOCO = (
+    "admittance.mujoco: the co-simulation needs MuJoCo, which is not installed; "
+    "install the package's `mujoco` extra: pip install './crates/python[mujoco]'"
+)
+
 
 def main(argv=None):
     p = argparse.ArgumentParser(
@@ -38,6 +44,11 @@ def main(argv=None):
             p.error(f"--{name.replace('_', '-')} {value}: must be a positive number")
     if a.nodes < 1:
         p.error("--nodes must be at least 1")
+    try:
+        import mujoco  # noqa: F401  (the plant; imported again where it is used)
+    except ImportError:
+        print(MISSING_MUJOCO, file=sys.stderr)
+        return 2
     cfg = CosimConfig(
         urdf=a.urdf, base=a.base, tip=a.tip, out=a.out, contact=a.contact, duration=a.duration,
         training_duration=a.training_duration, validation_duration=a.validation_duration,
