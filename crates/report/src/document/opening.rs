@@ -183,7 +183,7 @@ fn admittance(folder: &RunFolder) -> (String, Vec<Row>) {
             ));
         }
     }
-    (claim.into(), rows)
+    (claim, rows)
 }
 
 fn dynamic_nodes(folder: &RunFolder) -> (String, Vec<Row>) {
