@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The broad RBF network fit of `admittance` (METHOD.md section 5) in numpy/scipy, for timing.
+"""The broad RBF network fit of `admittance` (docs/method.md section 5) in numpy/scipy, for timing.
 
 Reads what `crates/learning/examples/broad_train_timing.rs --out DIR` wrote (the data set,
 the standardisation, the centres and widths, the chosen lambda and Rust's weights), fits the

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Times the broad RBF network fit at the paper's size (N = 450,000, L = 1000, d_in = 21,
-# d_out = 7; METHOD.md section 5) in Rust and in numpy on the same data, centres and widths,
+# d_out = 7; docs/method.md section 5) in Rust and in numpy on the same data, centres and widths,
 # checks that both give the same weights, times a growth by 100 nodes against a full
 # retrain, and reports peak memory.
 #

@@ -7,8 +7,11 @@ and that every numeric attribute of every joint (origin, axis, limit, dynamics,
 joint type, parent, child) and every link inertial (origin, mass, inertia) is equal
 as a float. Collision/visual geometry is not compared (our model has none).
 
-Usage: python3 scripts/oracle/check_baxter_model.py [OURS] [REFERENCE]
-Default REFERENCE: ../shared/models/baxter_left_arm.urdf next to the repository.
+Usage: python3 scripts/oracle/check_baxter_model.py [OURS] REFERENCE
+REFERENCE (or the environment variable BAXTER_REFERENCE_URDF): the left-arm chain taken from
+the published description, RethinkRobotics/baxter_common on GitHub,
+baxter_description/urdf/baxter_base/baxter_base.urdf.xacro (the header of
+models/baxter_left_arm.urdf names the revision and what was kept).
 Standard library only.
 """
 import math
@@ -86,9 +89,15 @@ def same(a, b):
 
 
 def main():
-    ours = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "models", "baxter_left_arm.urdf")
-    ref = sys.argv[2] if len(sys.argv) > 2 else os.path.normpath(
-        os.path.join(ROOT, "..", "shared", "models", "baxter_left_arm.urdf"))
+    args = sys.argv[1:]
+    if len(args) == 1:
+        args = [os.path.join(ROOT, "models", "baxter_left_arm.urdf")] + args
+    ours = args[0] if args else os.path.join(ROOT, "models", "baxter_left_arm.urdf")
+    ref = args[1] if len(args) > 1 else os.environ.get("BAXTER_REFERENCE_URDF")
+    if not ref:
+        print("usage: check_baxter_model.py [OURS] REFERENCE (or set BAXTER_REFERENCE_URDF)",
+              file=sys.stderr)
+        return 2
     if not os.path.exists(ref):
         print(f"reference not found: {ref}", file=sys.stderr)
         return 2

@@ -10,6 +10,7 @@
 //! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
 //! | 2 | bad command-line arguments (usage) |
 //! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder |
+//! | 130 | interrupted (Ctrl-C): one line says so; nothing of the user's was changed |
 //!
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,
 //! and how to fix it.
@@ -17,6 +18,7 @@
 mod dynamics_cmd;
 mod evaluate_cmd;
 mod identify_cmd;
+mod interrupt;
 mod list_cmd;
 mod progress;
 mod report_cmd;
@@ -87,6 +89,7 @@ pub fn write_stdout(text: &str) {
 }
 
 fn main() -> ExitCode {
+    interrupt::install();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use admittance_scenario::{run_scenario, RunError, RunOptions};
+use admittance_scenario::{run_scenario_variants, RunError, RunOptions};
 use clap::Args;
 
 use crate::progress::{self, RunProgress, Spinner};
@@ -26,9 +26,9 @@ pub struct RunArgs {
     /// Refuse a variant whose recorded time series would take more memory than this (GiB).
     #[arg(long, value_name = "GIB", default_value_t = admittance_scenario::Limits::default().max_series_bytes / (1u64 << 30) as f64)]
     max_series_gb: f64,
-    /// Run only this variant.
-    #[arg(long)]
-    variant: Option<String>,
+    /// Run only this variant (repeatable: --variant a --variant b runs both, in that order).
+    #[arg(long, value_name = "NAME")]
+    variant: Vec<String>,
     /// Override a scenario value: --set section.key=value (repeatable; same validation as the file).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -81,10 +81,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         recording: !args.no_recording,
         ..admittance_report::Options::default()
     };
-    let result = run_scenario(
+    crate::interrupt::set_message(&crate::interrupt::run_message(&args.out));
+    let result = run_scenario_variants(
         &args.scenario,
         &args.out,
-        args.variant.as_deref(),
+        &args.variant,
         &args.set,
         &options,
         args.force,

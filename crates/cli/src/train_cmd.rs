@@ -1,5 +1,5 @@
 //! `admittance train` and `admittance grow`: the flat RBF network of the learned observer
-//! (METHOD.md section 5) from free-motion data (docs/outputs.md, "Free-motion data").
+//! (docs/method.md section 5) from free-motion data (docs/outputs.md, "Free-motion data").
 //!
 //! Inputs `[q, qdot, qddot]`, targets `tau`. The last `--validation-fraction` of the rows
 //! (by time, default 20%) is held out: lambda is chosen on it (the broad module's grid) and
@@ -44,7 +44,7 @@ pub struct TrainArgs {
     /// Enhancement (Gaussian) nodes L (at most the training rows).
     #[arg(long, default_value_t = 1000, value_parser = positive_count, allow_negative_numbers = true)]
     nodes: usize,
-    /// Add friction-shaped inputs tanh(qdot / v) (METHOD.md section 7).
+    /// Add friction-shaped inputs tanh(qdot / v) (docs/method.md section 7).
     #[arg(long)]
     friction_features: bool,
     /// Second low-pass (Hz) on q and tau before differentiating again, the observer input

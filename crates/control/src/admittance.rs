@@ -1,4 +1,4 @@
-//! The joint-space admittance model and the smooth reference saturation (METHOD.md
+//! The joint-space admittance model and the smooth reference saturation (docs/method.md
 //! section 2, the paper's eq. 5-7).
 //!
 //! ```text
@@ -16,7 +16,7 @@ use crate::config::{Bound, JointValues};
 use crate::error::{ConfigError, Fault, StepStatus};
 use crate::safe_hold::first_non_finite;
 
-/// Saturation of the admittance state (METHOD.md section 2, eq. 7), per joint.
+/// Saturation of the admittance state (docs/method.md section 2, eq. 7), per joint.
 ///
 /// Joint `i` keeps `q_r,i` strictly inside `(centre_i - half_range_i, centre_i + half_range_i)`.
 /// A joint whose `half_range` is `+inf` is not saturated (`q_r = q_a`).
@@ -59,7 +59,7 @@ impl SaturationConfig {
     }
 }
 
-/// Configuration of [`Admittance`] (METHOD.md section 2). Paper: `C_d = 3`, `G_d = 5`,
+/// Configuration of [`Admittance`] (docs/method.md section 2). Paper: `C_d = 3`, `G_d = 5`,
 /// no `M_d`, `rho = 0.95`, `C = 1.1`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -236,11 +236,11 @@ pub struct AdmittanceInput<'a> {
     pub qdot_d: &'a [f64],
     /// Desired acceleration `q_d''`.
     pub qddot_d: &'a [f64],
-    /// Estimated external torque `tau_ext_hat` (METHOD.md section 0 sign).
+    /// Estimated external torque `tau_ext_hat` (docs/method.md section 0 sign).
     pub external_torque_estimate: &'a [f64],
 }
 
-/// The admittance model with reference saturation (METHOD.md section 2).
+/// The admittance model with reference saturation (docs/method.md section 2).
 ///
 /// State: the deviation `x = q_a - q_d` (and `x'` with `M_d`), zero after construction and
 /// [`reset`](Self::reset), so that with zero `tau_ext_hat` the admittance state is exactly

@@ -1,4 +1,4 @@
-//! The interface every controller implements (METHOD.md sections 3 and 6: the paper's
+//! The interface every controller implements (docs/method.md sections 3 and 6: the paper's
 //! controller and the baselines run in one harness).
 
 use crate::error::StepStatus;
@@ -7,7 +7,7 @@ use crate::error::StepStatus;
 ///
 /// All slices have one value per joint. `q` and `qdot` are the *measured* (sensor-filtered)
 /// joint positions and velocities; the controller never sees the plant's true state or true
-/// acceleration (METHOD.md section 1, "Sensors"). `q_ref` and its derivatives are the
+/// acceleration (docs/method.md section 1, "Sensors"). `q_ref` and its derivatives are the
 /// compliant reference `q_r, q_r', q_r''` (the output of [`crate::Admittance`], or the desired
 /// trajectory itself when no admittance model is used).
 #[derive(Clone, Copy, Debug)]
@@ -24,7 +24,7 @@ pub struct ControlInput<'a> {
     pub qdot_ref: &'a [f64],
     /// Reference acceleration `q_r''`.
     pub qddot_ref: &'a [f64],
-    /// Estimated external torque `tau_ext_hat` (METHOD.md section 0 sign: the torque the
+    /// Estimated external torque `tau_ext_hat` (docs/method.md section 0 sign: the torque the
     /// environment applies to the robot); zeros when there is no observer.
     pub external_torque_estimate: &'a [f64],
 }

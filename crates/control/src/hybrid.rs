@@ -1,4 +1,4 @@
-//! The hybrid observer (beyond the paper; METHOD.md sections 5 and 7): the generalised
+//! The hybrid observer (beyond the paper; docs/method.md sections 5 and 7): the generalised
 //! momentum observer on a nominal model, with a flat RBF network that supplies what the
 //! nominal model misses.
 //!

@@ -1,4 +1,4 @@
-//! The learned sensorless observer (METHOD.md section 5, the paper's eq. 19): a flat
+//! The learned sensorless observer (docs/method.md section 5, the paper's eq. 19): a flat
 //! ("broad") RBF network trained on free-motion data predicts the free-motion torque
 //! `f_hat(q, q', q'')`; in contact the difference to the applied torque is the external
 //! torque,
@@ -7,9 +7,9 @@
 //!     tau_ext_hat = LP( f_hat(q, q', q'') - tau )
 //! ```
 //!
-//! (METHOD.md section 0 sign: with `M q'' + C q' + G + F = tau + tau_ext`, the free-motion
+//! (docs/method.md section 0 sign: with `M q'' + C q' + G + F = tau + tau_ext`, the free-motion
 //! torque is `f = M q'' + C q' + G + F`, so `f - tau = tau_ext`). `LP` is a first-order
-//! low-pass (METHOD.md section 7: the acceleration is noisy). The network's input is the raw
+//! low-pass (docs/method.md section 7: the acceleration is noisy). The network's input is the raw
 //! `[q, q', q'']` (it standardises internally); `tau` must be the torque signal the training
 //! data used (docs/outputs.md, "Free-motion data": the filtered command, one sample late).
 

@@ -1,4 +1,4 @@
-//! Controllers of `admittance` (METHOD.md sections 2-4; issue 3, part "control").
+//! Controllers of `admittance` (docs/method.md sections 2-4; issue 3, part "control").
 //!
 //! * [`Controller`]: the small interface every controller implements, so that the paper's
 //!   method and the baselines run in one harness ([`ControlInput`] in, torque out,
@@ -6,16 +6,16 @@
 //! * [`SafeHold`]: input validation, staleness detection and the safe output on faults
 //!   ("hold with damping": `tau = G_nominal(q_hold) - K_hold qdot`, clamped).
 //! * [`Admittance`]: the admittance model `C_d (q_a' - q_d') + G_d (q_a - q_d) = tau_ext_hat`
-//!   (optionally with `M_d`) and the smooth reference saturation of eq. 7 (METHOD.md
+//!   (optionally with `M_d`) and the smooth reference saturation of eq. 7 (docs/method.md
 //!   section 2).
-//! * [`NeuralController`]: the paper's adaptive RBF controller (METHOD.md section 3,
+//! * [`NeuralController`]: the paper's adaptive RBF controller (docs/method.md section 3,
 //!   eq. 24-27 with METHOD's sign set), lumped or split f networks, the deadzone
-//!   compensation network, and the dynamic-node hooks (discard/grow, METHOD.md section 4).
+//!   compensation network, and the dynamic-node hooks (discard/grow, docs/method.md section 4).
 //! * Baselines: [`PdController`] (PD, PD + nominal gravity) and
 //!   [`ComputedTorqueController`].
 //! * [`Observer`]: the interface of external-torque estimators, with [`NoObserver`] and
 //!   [`OracleObserver`]; [`MomentumObserver`], the generalised-momentum observer with a
-//!   nominal model (METHOD.md section 5, baseline); [`LearnedObserver`], the flat RBF
+//!   nominal model (docs/method.md section 5, baseline); [`LearnedObserver`], the flat RBF
 //!   network's estimate `f_hat(q, q', q'') - tau`, low-pass filtered (eq. 19).
 //!
 //! Every `step`/`update` is allocation-free and panic-free after construction, and every

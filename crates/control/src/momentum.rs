@@ -1,4 +1,4 @@
-//! The generalised-momentum observer (METHOD.md section 5, "Baseline"): a model-based
+//! The generalised-momentum observer (docs/method.md section 5, "Baseline"): a model-based
 //! external-torque estimate that needs `M`, `C` and `G` of a nominal model but no
 //! acceleration.
 //!
@@ -7,10 +7,10 @@
 //!     r = K_O (p - integral_0^t (tau + C(q, q')^T q' - G(q) + r) ds - p0)
 //! ```
 //!
-//! With the plant `M q'' + C q' + G + F = tau + tau_ext` (METHOD.md section 1) and
+//! With the plant `M q'' + C q' + G + F = tau + tau_ext` (docs/method.md section 1) and
 //! `Mdot = C + C^T`, `p' = tau + tau_ext + C^T q' - G - F`, so `r' = K_O (tau_ext - F - r)`:
 //! per joint a first-order low-pass of `tau_ext - F` with time constant `1 / K_O,i`. The
-//! estimate has METHOD.md section 0's sign (the torque applied **to** the robot); friction
+//! estimate has docs/method.md section 0's sign (the torque applied **to** the robot); friction
 //! that the nominal model does not know appears in it with the opposite sign.
 //!
 //! Discretisation (one [`Observer::update`] per control sample, period `dt`): the torque
@@ -52,7 +52,7 @@ impl Default for MomentumObserverConfig {
     }
 }
 
-/// The generalised-momentum observer with a nominal model (METHOD.md section 5).
+/// The generalised-momentum observer with a nominal model (docs/method.md section 5).
 /// Allocation-free after construction.
 #[derive(Clone, Debug)]
 pub struct MomentumObserver {

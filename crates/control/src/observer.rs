@@ -1,4 +1,4 @@
-//! External-torque observers (METHOD.md section 5): the interface, and the two trivial
+//! External-torque observers (docs/method.md section 5): the interface, and the two trivial
 //! sources used before the learned observer exists (issue 3: "none, or the true value for
 //! now").
 
@@ -6,7 +6,7 @@ use crate::error::{Fault, StepStatus};
 use crate::safe_hold::first_non_finite;
 
 /// What an observer is given at each step. All slices have one value per joint; `qddot` is
-/// the filtered numerical acceleration (never the plant's true one, METHOD.md section 1).
+/// the filtered numerical acceleration (never the plant's true one, docs/method.md section 1).
 #[derive(Clone, Copy, Debug)]
 pub struct ObserverInput<'a> {
     /// Time of the sample (s).
@@ -21,7 +21,7 @@ pub struct ObserverInput<'a> {
     pub tau_commanded: &'a [f64],
 }
 
-/// A source of `tau_ext_hat` (METHOD.md section 0 sign: the torque the environment applies to
+/// A source of `tau_ext_hat` (docs/method.md section 0 sign: the torque the environment applies to
 /// the robot).
 pub trait Observer {
     /// A short identifier.

@@ -20,7 +20,7 @@ pub struct ReferenceInput<'a> {
     /// Measured (sensor-filtered) position `q`: where the task-space model evaluates the
     /// Jacobian of its wrench estimate. The joint-space model does not use it.
     pub q: &'a [f64],
-    /// Estimated external torque `tau_ext_hat` (METHOD.md section 0 sign).
+    /// Estimated external torque `tau_ext_hat` (docs/method.md section 0 sign).
     pub external_torque_estimate: &'a [f64],
 }
 

@@ -1,4 +1,4 @@
-//! The admittance model and the reference saturation (METHOD.md section 2, eq. 5-7).
+//! The admittance model and the reference saturation (docs/method.md section 2, eq. 5-7).
 
 use admittance_control::*;
 use proptest::prelude::*;

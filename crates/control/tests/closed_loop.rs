@@ -1,4 +1,4 @@
-//! Closed-loop checks on a 2-joint arm simulated with `aba` (METHOD.md sections 3 and 6 A):
+//! Closed-loop checks on a 2-joint arm simulated with `aba` (docs/method.md sections 3 and 6 A):
 //! the sign set of the neural controller, deadzone compensation (a quick experiment A),
 //! computed torque with a perfect model, and the PD baselines.
 

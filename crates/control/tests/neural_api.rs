@@ -1,4 +1,4 @@
-//! Configuration, dynamic-node hooks (METHOD.md section 4) and observers.
+//! Configuration, dynamic-node hooks (docs/method.md section 4) and observers.
 
 mod common;
 

@@ -1,4 +1,4 @@
-//! The task-space admittance (issue 16 part 1; METHOD.md section 2, task-space variant): the
+//! The task-space admittance (issue 16 part 1; docs/method.md section 2, task-space variant): the
 //! admittance equation at the hand, the wrench estimate `J^#T tau_ext_hat`, hand guiding,
 //! singular poses, the null-space posture, the joint saturation, exactness without a
 //! wrench, faults, and the surface shared with the joint-space model.

@@ -8,7 +8,7 @@
 //!
 //! Conventions: SI units; results in the base frame; 6-vectors (Jacobian rows,
 //! wrenches, `Jdot qdot`) put the linear part first; gravity `(0, 0, -9.81)` unless
-//! [`Model::gravity`] is changed. `M(q) qddot + C(q, qdot) qdot + G(q) = tau` is METHOD.md
+//! [`Model::gravity`] is changed. `M(q) qddot + C(q, qdot) qdot + G(q) = tau` is docs/method.md
 //! eq. 1 without friction, deadzone or environment (those belong to the simulator).
 //!
 //! ```

@@ -1,6 +1,6 @@
 //! One-sample prediction of the broad network at the observer's size: L = 1000 nodes,
 //! d_in = 21 ([q, q', q''] of 7 joints), d_out = 7, friction features on the velocities
-//! (METHOD.md sections 5 and 7). The observer calls this at 1 kHz.
+//! (docs/method.md sections 5 and 7). The observer calls this at 1 kHz.
 //! Also: the vectorised exp against libm's on 1000 values (one prediction's worth).
 
 use admittance_learning::broad::{exp_nonpositive_slice, fit, BroadConfig, Dataset};

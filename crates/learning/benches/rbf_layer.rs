@@ -1,4 +1,4 @@
-//! Per-step cost of the Gaussian RBF layer (METHOD.md section 3): 512 nodes, d = 28 / 22,
+//! Per-step cost of the Gaussian RBF layer (docs/method.md section 3): 512 nodes, d = 28 / 22,
 //! n = 7 outputs, as in the controller's two networks.
 
 use admittance_learning::rbf::{GaussianRbfLayer, GrowthParams, Placement, RbfLayerConfig};

@@ -1,4 +1,4 @@
-//! Times the broad network fit at the paper's size (METHOD.md section 5: N = 450,000
+//! Times the broad network fit at the paper's size (docs/method.md section 5: N = 450,000
 //! samples, L = 1000 nodes, d_in = 21, d_out = 7) on a deterministic synthetic data set,
 //! times a growth by 100 nodes against a full retrain, and writes the data, the centres,
 //! widths, standardisation and weights for `scripts/bench/broad_numpy.py` to reproduce the

@@ -1,14 +1,14 @@
-//! Flat ("broad") RBF network of the force-sensorless observer (METHOD.md section 5,
+//! Flat ("broad") RBF network of the force-sensorless observer (docs/method.md section 5,
 //! paper eq. 14-19).
 //!
 //! The network learns the free-motion torque `tau_free(q, q', q'')` from free-motion data
-//! (METHOD.md section 5); in contact, `tau_ext_hat = f_hat(q, q', q'') - tau` (eq. 19).
+//! (docs/method.md section 5); in contact, `tau_ext_hat = f_hat(q, q', q'') - tau` (eq. 19).
 //! It is generic over the input width d_in (21 for X = [q, q', q''] of a 7-joint arm) and
 //! the output width d_out (7).
 //!
 //! * Pattern row `a(x) = [X_std | friction features | 1 | xi(X)]`, width
 //!   P = d_in + F + 1 + L: standardised inputs ([`Standardiser`]), optional
-//!   `tanh(q'/v_k)` columns ([`FrictionFeatures`], METHOD.md section 7), a bias, and L
+//!   `tanh(q'/v_k)` columns ([`FrictionFeatures`], docs/method.md section 7), a bias, and L
 //!   Gaussian enhancement nodes `xi_j(X) = exp(-||X - u_j||^2 / eta_j^2)` ([`NodeSet`]).
 //! * Centres by k-means++ seeding on a random subsample, widths by a k-nearest-centre
 //!   heuristic ([`WidthRule`]); see *Design decisions* below.

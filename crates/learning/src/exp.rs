@@ -1,5 +1,5 @@
 //! The `exp` behind every Gaussian activation of the crate (the RBF layer of eq. 9 and
-//! the broad network of METHOD.md section 5): `exp(-x)` for `x` in `[0, MAX_EXPONENT]`.
+//! the broad network of docs/method.md section 5): `exp(-x)` for `x` in `[0, MAX_EXPONENT]`.
 //!
 //! Why not `f64::exp`: it is a scalar libm call (4-10 ns here), and a 512-node layer
 //! evaluates 512 of them per control step, a broad fit 450 million. This one is

@@ -1,10 +1,10 @@
 //! Learning layer of `admittance`: radial-basis-function networks.
 //!
-//! * [`rbf`]: the Gaussian RBF layer of the adaptive controller (METHOD.md sections 3-4):
+//! * [`rbf`]: the Gaussian RBF layer of the adaptive controller (docs/method.md sections 3-4):
 //!   preallocated capacity, sigma-modified weight adaptation, node relevance tracking,
 //!   discard and grow at run time without allocation.
 //! * [`broad`]: the flat ("broad") RBF network of the force-sensorless observer
-//!   (METHOD.md section 5): ridge regression on free-motion data, incremental growth.
+//!   (docs/method.md section 5): ridge regression on free-motion data, incremental growth.
 
 #![warn(missing_docs)]
 

@@ -1,9 +1,9 @@
-//! Gaussian RBF layer of the adaptive neural controller (METHOD.md sections 3 and 4).
+//! Gaussian RBF layer of the adaptive neural controller (docs/method.md sections 3 and 4).
 //!
 //! A [`GaussianRbfLayer`] maps an input `Z` (dimension `d`) to `n` outputs
 //!
 //! ```text
-//!     s_i(Z) = exp(-||Z - u_i||^2 / eta_i^2)          (eq. 9, METHOD.md section 3)
+//!     s_i(Z) = exp(-||Z - u_i||^2 / eta_i^2)          (eq. 9, docs/method.md section 3)
 //!     f_hat(Z) = W^T S(Z)                             (eq. 10)
 //! ```
 //!
@@ -11,27 +11,27 @@
 //! capacity `L_max` fixed at construction. It implements, without allocating after
 //! construction:
 //!
-//! * the sigma-modified update law `W' = Gamma (S(Z) e^T - sigma W)` (METHOD.md section 3,
+//! * the sigma-modified update law `W' = Gamma (S(Z) e^T - sigma W)` (docs/method.md section 3,
 //!   the corrected form of eq. 27), integrated over a control period by explicit Euler or by
 //!   the exact zero-order-hold solution ([`Integrator`]);
 //! * relevance tracking and **discard** of nodes whose activation stayed below a threshold
-//!   `Upsilon` over a trailing window (METHOD.md section 4, eq. 29-31);
+//!   `Upsilon` over a trailing window (docs/method.md section 4, eq. 29-31);
 //! * **growth** of a node at the current input when the mean distance to its `m` nearest
-//!   centres exceeds `Xi` (METHOD.md section 4, eq. 20-23; the new centre is placed at `Z`,
+//!   centres exceeds `Xi` (docs/method.md section 4, eq. 20-23; the new centre is placed at `Z`,
 //!   or on the segment from the nearest centre to `Z`, see [`GrowthParams::step_fraction`]).
 //!
 //! # Design notes
 //!
-//! * **Relevance** (METHOD.md section 4): [`GaussianRbfLayer::track_relevance`] keeps, per
+//! * **Relevance** (docs/method.md section 4): [`GaussianRbfLayer::track_relevance`] keeps, per
 //!   node, the maximum activation over the current bucket of `W` tracked steps and over the
 //!   previous complete bucket; the node's relevance is the larger of the two, i.e. its
 //!   maximum activation over the last `W..2W` tracked steps. [`GaussianRbfLayer::discard`]
 //!   removes a node iff it has been tracked for at least `W` steps and its relevance is
 //!   below `Upsilon`.
-//! * **Growth placement** (METHOD.md section 4, eq. 20): the new centre is placed at `Z`
+//! * **Growth placement** (docs/method.md section 4, eq. 20): the new centre is placed at `Z`
 //!   (default), or at `u_near + step_fraction (Z - u_near)` on the segment from the nearest
 //!   centre; width = mean width of the `m` neighbours; weight row = 0.
-//! * **Integration** (METHOD.md section 3): exact solution of the update law over a step
+//! * **Integration** (docs/method.md section 3): exact solution of the update law over a step
 //!   with `S(Z)` and `e` held (default), or explicit Euler.
 //! * **Cut-off**: activations below `min_activation` (default `1e-16`) are exactly zero.
 //! * **Speed**: the distance kernel reads a block-major copy of the centres and handles
@@ -95,7 +95,7 @@ pub use layer::{GaussianRbfLayer, GrowOutcome, LayerOptions};
 /// Errors reported by the per-step methods of [`GaussianRbfLayer`].
 ///
 /// None of them leaves the layer in a corrupted state: a method that returns an error has
-/// not modified the weights (METHOD.md section 3: adaptation is skipped, never fed with
+/// not modified the weights (docs/method.md section 3: adaptation is skipped, never fed with
 /// non-finite data).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum RbfError {
@@ -112,7 +112,7 @@ pub enum RbfError {
     /// The input `Z` contains a NaN or an infinity; the activations were invalidated.
     #[error("input Z is not finite")]
     NonFiniteInput,
-    /// The error vector `e` (e2 in METHOD.md section 3) contains a NaN or an infinity;
+    /// The error vector `e` (e2 in docs/method.md section 3) contains a NaN or an infinity;
     /// adaptation was skipped.
     #[error("error vector e is not finite")]
     NonFiniteError,

@@ -1,4 +1,4 @@
-//! Fitting, prediction and input checks of the flat RBF network (METHOD.md section 5).
+//! Fitting, prediction and input checks of the flat RBF network (docs/method.md section 5).
 
 mod broad_common;
 
@@ -295,7 +295,7 @@ fn constant_input_column_is_guarded() {
     assert!(out.iter().all(|v| v.is_finite()));
 }
 
-/// METHOD.md section 7: a Coulomb step at zero velocity is smoothed by Gaussian nodes;
+/// docs/method.md section 7: a Coulomb step at zero velocity is smoothed by Gaussian nodes;
 /// tanh(q'/v) features represent it.
 #[test]
 fn friction_features_capture_the_coulomb_step() {

@@ -1,4 +1,4 @@
-//! Incremental growth (METHOD.md section 5, eq. 14-16): the exact ridge route (Cholesky
+//! Incremental growth (docs/method.md section 5, eq. 14-16): the exact ridge route (Cholesky
 //! extension) and the paper's Greville pseudo-inverse form both equal a full retrain.
 
 mod broad_common;
@@ -261,7 +261,7 @@ fn greville_equals_pinv_retrain_full_rank() {
     assert!(mat_rel_diff(lhs.as_ref(), aty.as_ref()) < 1e-10);
 }
 
-/// The c == 0 branch: a new column in the span of A (METHOD.md section 5's corrected
+/// The c == 0 branch: a new column in the span of A (docs/method.md section 5's corrected
 /// `b^T = (1 + d^T d)^-1 d^T A^+`) still gives the pseudo-inverse of the grown matrix.
 #[test]
 fn greville_dependent_column_branch() {

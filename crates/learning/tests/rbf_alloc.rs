@@ -1,5 +1,5 @@
 //! The per-step methods of the Gaussian RBF layer allocate nothing after construction
-//! (METHOD.md section 4: dynamic nodes "without allocation in the control step").
+//! (docs/method.md section 4: dynamic nodes with no allocation inside the control step).
 //!
 //! The counting allocator of `admittance-testkit` wraps `System`; only allocations made by
 //! this test's thread inside the measured closure are counted, so the test harness cannot

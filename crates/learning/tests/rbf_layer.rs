@@ -1,4 +1,4 @@
-//! Behaviour of the Gaussian RBF layer (METHOD.md sections 3 and 4): activations and output
+//! Behaviour of the Gaussian RBF layer (docs/method.md sections 3 and 4): activations and output
 //! against hand computations, centre placement, online learning, sigma-modification, discard
 //! and growth.
 
@@ -181,7 +181,7 @@ fn target(z: &[f64]) -> [f64; 2] {
 
 /// A lattice network learns a smooth 2-input, 2-output function online along a periodic
 /// trajectory (deterministic learning), driven by e = f(Z) - f_hat(Z) (the update law of
-/// METHOD.md section 3 with e2 replaced by the approximation error). The learned map is
+/// docs/method.md section 3 with e2 replaced by the approximation error). The learned map is
 /// then checked with frozen weights along the whole orbit.
 #[test]
 fn learns_a_smooth_function_online() {

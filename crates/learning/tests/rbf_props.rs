@@ -1,4 +1,4 @@
-//! Property tests of the Gaussian RBF layer (METHOD.md sections 3 and 4).
+//! Property tests of the Gaussian RBF layer (docs/method.md sections 3 and 4).
 
 use admittance_learning::rbf::{GaussianRbfLayer, GrowthParams, LayerOptions};
 use proptest::prelude::*;

@@ -1,5 +1,5 @@
 //! `Admittance`: the joint-space admittance model with the smooth reference saturation
-//! (METHOD.md section 2, eq. 5-7).
+//! (docs/method.md section 2, eq. 5-7).
 
 use admittance_control::{
     Admittance, AdmittanceConfig, AdmittanceInput, JointValues, SaturationConfig,
@@ -16,7 +16,7 @@ use crate::model::PyModel;
 const JOINTS: &str = "one value per joint, in chain order";
 
 /// The admittance model `M_d (q_a'' - q_d'') + C_d (q_a' - q_d') + G_d (q_a - q_d) =
-/// tau_ext_hat` (METHOD.md section 2; without `mass` first order) and the smooth saturation
+/// tau_ext_hat` (docs/method.md section 2; without `mass` first order) and the smooth saturation
 /// `q_r = c + sat(q_a - c)` that keeps the reference strictly inside `(c - C, c + C)`.
 ///
 /// `damping` (C_d), `stiffness` (G_d) and `mass` (M_d, optional) are one number or one per

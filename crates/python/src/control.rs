@@ -205,7 +205,7 @@ impl PyController {
     }
 }
 
-/// The paper's adaptive RBF neural controller with deadzone compensation (METHOD.md
+/// The paper's adaptive RBF neural controller with deadzone compensation (docs/method.md
 /// section 3) on the nominal model `m`.
 ///
 /// `config` takes the keys of a scenario's `[controller.neural]` table (`k1`, `k2`, `f`,

@@ -1,4 +1,4 @@
-//! The learned observer's network (METHOD.md section 5): `train`, `Network` (`grow`,
+//! The learned observer's network (docs/method.md section 5): `train`, `Network` (`grow`,
 //! `predict`, `save`) and `load_network`, as `admittance train` / `admittance grow` do it
 //! (crates/cli/src/train_cmd.rs): free-motion data from a CSV file or a dict of arrays,
 //! inputs `[q, qdot, qddot]` through the optional input conditioning, the last

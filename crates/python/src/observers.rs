@@ -39,7 +39,7 @@ const JOINTS: &str = "one value per joint, in chain order";
 /// An external-torque observer: the common interface of `MomentumObserver`,
 /// `LearnedObserver`, `HybridObserver` and `OracleObserver` (not constructed directly).
 ///
-/// The estimate has METHOD.md's sign: the torque the environment applies to the robot.
+/// The estimate has docs/method.md's sign: the torque the environment applies to the robot.
 /// `update` never raises on bad numbers: on a non-finite input or an invalid `dt` it returns
 /// zeros and records the fault in `fault` / `fault_count` (the momentum observer restarts
 /// its integral at the next valid sample). Arguments of the wrong shape are a `ValueError`.
@@ -189,7 +189,7 @@ fn momentum_config(
     }
 }
 
-/// The generalised-momentum observer on the nominal model `m` (METHOD.md section 5): the
+/// The generalised-momentum observer on the nominal model `m` (docs/method.md section 5): the
 /// estimate follows the true external torque (less the friction `m` does not know) through
 /// a first-order lag of time constant `1 / gain` (1/s; default 50).
 ///

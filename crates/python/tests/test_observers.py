@@ -1,5 +1,5 @@
 """Observers on data whose external torque is known: tau = RNEA(q, qdot, qddot) - tau_ext along
-a smooth excitation (the arm's own dynamics, METHOD.md's sign: tau_ext acts on the robot)."""
+a smooth excitation (the arm's own dynamics, docs/method.md's sign: tau_ext acts on the robot)."""
 
 import numpy as np
 import pytest

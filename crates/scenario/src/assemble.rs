@@ -202,7 +202,7 @@ fn controller(
     })
 }
 
-/// The external-torque observer (METHOD.md section 5), trained or loaded from the cache
+/// The external-torque observer (docs/method.md section 5), trained or loaded from the cache
 /// for `learned` and `hybrid`.
 #[allow(clippy::too_many_arguments)]
 fn observer(

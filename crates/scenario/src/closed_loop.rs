@@ -1,4 +1,4 @@
-//! The wiring of one control period (METHOD.md sections 2-5), the only place it exists:
+//! The wiring of one control period (docs/method.md sections 2-5), the only place it exists:
 //! the runner, the 1 kHz example and the Python package all step a [`ClosedLoop`].
 //!
 //! ```text
@@ -120,7 +120,7 @@ impl ObserverStage {
     }
 }
 
-/// The admittance model that shapes the reference: joint space (METHOD.md section 2,
+/// The admittance model that shapes the reference: joint space (docs/method.md section 2,
 /// eq. 5-7 per joint) or task space (the hand's pose, `f_ext_hat = J^{+T} tau_ext_hat`).
 #[allow(clippy::large_enum_variant)] // built once per loop
 pub enum Compliance {
@@ -179,7 +179,7 @@ pub enum EstimateSource {
     Observer(Box<ObserverStage>),
 }
 
-/// Whether the controller's law subtracts the estimate (METHOD.md section 3, eq. 26:
+/// Whether the controller's law subtracts the estimate (docs/method.md section 3, eq. 26:
 /// `tau = ... - tau_ext_hat`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum EstimateToController {

@@ -1,4 +1,4 @@
-//! Free-motion data (METHOD.md section 5): what the sensors saw while the arm moved without
+//! Free-motion data (docs/method.md section 5): what the sensors saw while the arm moved without
 //! contact, the training data of the learned observer. The format is the one the runner
 //! writes with `[record] free_motion_csv = true` and the one a user exports from a real arm
 //! (docs/outputs.md, "free_motion.csv"):

@@ -60,7 +60,8 @@ pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
 pub use run_folder::{
-    check_out_dir, remove_stale_partials, run_scenario, write_series_csv, RunError, RunSummary,
+    check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants, write_series_csv,
+    RunError, RunSummary,
 };
 pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};

@@ -1,4 +1,4 @@
-//! Dynamic-node events of experiment C (METHOD.md section 4): the discard and the growth
+//! Dynamic-node events of experiment C (docs/method.md section 4): the discard and the growth
 //! requests at their times, the approximation error of `f` at the end of each phase, and the
 //! f network's node weights over time.
 

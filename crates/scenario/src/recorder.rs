@@ -63,7 +63,7 @@ impl Recorder {
     }
 
     /// Free-motion data: what the sensors saw, with the filtered command delayed by one
-    /// sample to match `qddot`'s delay (METHOD.md section 7, docs/outputs.md).
+    /// sample to match `qddot`'s delay (docs/method.md section 7, docs/outputs.md).
     pub fn sensed(&mut self, t: f64, m: &Measurement) {
         if let Some(fm) = self.free_motion.as_mut() {
             let mut row = Vec::with_capacity(1 + 4 * m.q.len());

@@ -171,15 +171,36 @@ fn process_alive(pid: u32) -> bool {
 }
 
 /// Runs every variant of the scenario at `path` (or only `only`) with the `--set`
-/// `overrides` and writes the folder `out_dir`. `progress` is told when each variant starts
-/// (name, index, count); `finish` runs on the complete but not yet renamed folder (its
-/// path is the argument; `summary.json` and every CSV are there) to add more outputs
-/// (figures, report, recording): an error there removes the folder like any other.
+/// `overrides` and writes the folder `out_dir`: [`run_scenario_variants`] with at most one
+/// variant.
 #[allow(clippy::too_many_arguments)]
 pub fn run_scenario(
     path: &Path,
     out_dir: &Path,
     only: Option<&str>,
+    overrides: &[String],
+    options: &RunOptions,
+    force: bool,
+    progress: impl FnMut(&str, usize, usize),
+    finish: impl FnOnce(&Path) -> Result<(), RunError>,
+) -> Result<RunSummary, RunError> {
+    let only: Vec<String> = only.map(str::to_string).into_iter().collect();
+    run_scenario_variants(
+        path, out_dir, &only, overrides, options, force, progress, finish,
+    )
+}
+
+/// Runs every variant of the scenario at `path` (or only those named in `only`, in that
+/// order, each once) with the `--set` `overrides` and writes the folder `out_dir`.
+/// `progress` is told when each variant starts (name, index, count); `finish` runs on the
+/// complete but not yet renamed folder (its path is the argument; `summary.json` and every
+/// CSV are there) to add more outputs (figures, report, recording): an error there removes
+/// the folder like any other.
+#[allow(clippy::too_many_arguments)]
+pub fn run_scenario_variants(
+    path: &Path,
+    out_dir: &Path,
+    only: &[String],
     overrides: &[String],
     options: &RunOptions,
     force: bool,
@@ -192,11 +213,19 @@ pub fn run_scenario(
         source.set(o)?;
     }
     let names = source.variant_names();
-    let selected: Vec<Option<String>> = match only {
-        Some(v) => vec![Some(v.to_string())],
-        None if names.is_empty() => vec![None],
-        None => names.iter().cloned().map(Some).collect(),
-    };
+    let mut selected: Vec<Option<String>> = Vec::new();
+    for v in only {
+        if !selected.iter().any(|s| s.as_deref() == Some(v.as_str())) {
+            selected.push(Some(v.clone()));
+        }
+    }
+    if selected.is_empty() {
+        selected = if names.is_empty() {
+            vec![None]
+        } else {
+            names.iter().cloned().map(Some).collect()
+        };
+    }
     // Resolve and validate every selected variant before the first long run.
     let mut scenario_name = String::new();
     for v in &selected {

@@ -1,4 +1,4 @@
-//! Experiment B (`scenarios/admittance.toml`, METHOD.md sections 2 and 5) and the
+//! Experiment B (`scenarios/admittance.toml`, docs/method.md sections 2 and 5) and the
 //! free-motion recording (`scenarios/free_motion.toml`) through the library API, shortened.
 //! Structural checks plus the properties that hold at any length: the oracle's estimate is
 //! the true torque (one control step late), the oracle's own admittance error is zero, the

@@ -196,7 +196,7 @@ fn dynamic_nodes_scenario_discards_and_grows() {
     }
 }
 
-/// One simulated hour of experiment A with the compensation network (METHOD.md section 3:
+/// One simulated hour of experiment A with the compensation network (docs/method.md section 3:
 /// the weights and errors stay bounded). Slow (minutes): run with
 /// `cargo test --release -p admittance-sim --test scenarios -- --ignored`.
 /// The same check from the command line:

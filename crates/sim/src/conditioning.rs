@@ -3,7 +3,7 @@
 //! at run time.
 //!
 //! Why: the sensors' differentiation filter (40 Hz in the experiment B scenarios) is sized
-//! for the controller, and the acceleration it yields is mostly noise (METHOD.md section 7:
+//! for the controller, and the acceleration it yields is mostly noise (docs/method.md section 7:
 //! in the free-motion data of `scenarios/free_motion.toml` the part of `qddot` above 5 Hz
 //! has a standard deviation of about 2 rad/s^2 on every joint, larger than the true
 //! accelerations), so a network on `[q, qdot, qddot]` cannot learn the inertial torque.

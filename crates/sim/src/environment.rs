@@ -1,4 +1,4 @@
-//! Environments: what acts on the arm from outside (`tau_ext`, METHOD.md section 1), each
+//! Environments: what acts on the arm from outside (`tau_ext`, docs/method.md section 1), each
 //! active in a time window `[t_start, t_end)`.
 //!
 //! * **Joint-space spring-damper-mass** on selected joints:
@@ -46,7 +46,8 @@ pub struct EnvironmentConfig {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Anchor {
-    /// `q_E` = the joint positions when the window opens (no torque step; METHOD.md section 7).
+    /// `q_E` = the joint positions when the window opens (no torque step; docs/method.md
+    /// section 7).
     #[default]
     ContactStart,
     /// `q_E = 0` (the paper's `-tau_ext = 0.01 q'' + 0.15 q' + 1.1 q` literally).

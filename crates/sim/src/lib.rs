@@ -1,5 +1,5 @@
 //! Simulation layer of `admittance`: the plant that stands in for the robot
-//! (METHOD.md section 1) and what the controller can measure of it.
+//! (docs/method.md section 1) and what the controller can measure of it.
 //!
 //! * [`plant`]: the true arm: rigid-body dynamics of a (possibly perturbed) model,
 //!   friction, actuator deadzone and effort limits, the counterbalance spring; fixed-step
@@ -10,7 +10,7 @@
 //!   both with implicit friction.
 //! * [`sensors`]: encoder quantisation and noise, filtered differentiation, fault
 //!   injection.
-//! * [`free_motion`]: the free-motion data format (METHOD.md section 5) and its validating
+//! * [`free_motion`]: the free-motion data format (docs/method.md section 5) and its validating
 //!   loader.
 //!
 //! ```

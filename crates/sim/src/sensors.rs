@@ -1,4 +1,4 @@
-//! What the controller sees (METHOD.md sections 1 and 7): encoder angles with
+//! What the controller sees (docs/method.md sections 1 and 7): encoder angles with
 //! quantisation and Gaussian noise, and velocities and accelerations only by numerical
 //! differentiation of the low-pass-filtered angles. The commanded torque passes through
 //! the same filter, so that an observer can pair signals with matching delays.

@@ -1,5 +1,5 @@
 //! Configuration of the neural controller: its networks, the form of the f approximation
-//! and the controller's gains and switches (METHOD.md sections 3 and 4).
+//! and the controller's gains and switches (docs/method.md sections 3 and 4).
 
 use admittance_learning::rbf::{GrowthParams, Integrator, Placement};
 use serde::{Deserialize, Serialize};
@@ -27,7 +27,7 @@ fn default_max_neighbours() -> usize {
     16
 }
 
-/// One Gaussian RBF network of the controller (METHOD.md section 3: eq. 9 nodes; section 4:
+/// One Gaussian RBF network of the controller (docs/method.md section 3: eq. 9 nodes; section 4:
 /// dynamic nodes). Every field has a default, so a scenario sets only what it changes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -63,7 +63,7 @@ pub struct NetworkConfig {
     pub upper: Option<Vec<f64>>,
     /// Weight integrator (`"exact_decay"`, default, or `"euler"`).
     pub integrator: Integrator,
-    /// Relevance window (tracked steps) used by discard (METHOD.md section 4).
+    /// Relevance window (tracked steps) used by discard (docs/method.md section 4).
     pub relevance_window: usize,
     /// Activations below this are computed as zero (default 1e-16).
     pub min_activation: f64,
@@ -94,7 +94,7 @@ impl Default for NetworkConfig {
     }
 }
 
-/// How `f = M alpha' + C alpha + G` is approximated (METHOD.md section 3).
+/// How `f = M alpha' + C alpha + G` is approximated (docs/method.md section 3).
 #[allow(clippy::large_enum_variant)] // a configuration value, built once
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
@@ -141,8 +141,8 @@ fn yes() -> bool {
     true
 }
 
-/// Configuration of [`NeuralController`](crate::NeuralController) (METHOD.md section 3). Defaults are the paper's
-/// experiment A: `K1 = 12`, `K2 = 6`, lumped f network with `Theta_f = 0.3`, deadzone
+/// Configuration of [`NeuralController`](crate::NeuralController) (docs/method.md section 3).
+/// Defaults are the paper's experiment A: `K1 = 12`, `K2 = 6`, lumped f network with `Theta_f = 0.3`, deadzone
 /// network with `Theta_t = 0.125`, 512 random nodes each, `sigma = 0.035`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,4 +1,4 @@
-//! The neural controller: construction, the state it exposes, the law of METHOD.md
+//! The neural controller: construction, the state it exposes, the law of docs/method.md
 //! section 3 and the [`Controller`] step with its safe hold.
 
 use std::sync::Arc;
@@ -225,7 +225,7 @@ impl NeuralController {
     }
 
     /// `f_hat` at an arbitrary point without changing any state (for measuring the
-    /// approximation error along a recorded trajectory, METHOD.md section 6 C). `e2` is used
+    /// approximation error along a recorded trajectory, docs/method.md section 6 C). `e2` is used
     /// only by a lumped network with `include_e2`. Does not allocate.
     pub fn predict_f(
         &mut self,

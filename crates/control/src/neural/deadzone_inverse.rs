@@ -13,12 +13,12 @@
 //! ```
 //!
 //! projected onto `0 <= d_r_hat_i <= b_i`, `-b_i <= d_l_hat_i <= 0` (`b_i` the configured
-//! bound; 0 disables joint i). Why: with unit slopes the torque lost in METHOD.md's deadzone
+//! bound; 0 disables joint i). Why: with unit slopes the torque lost in docs/method.md's deadzone
 //! is `Delta_tau(u) = sat(u; d_l, d_r)`, a function of the command alone with corners at the
 //! edges; to make `D(u) = v` the command must *jump* the gap when `v` changes sign,
 //! `u = v + d_r` for `v > 0` and `u = v + d_l` for `v < 0`. That is a step in `v` of height
 //! `d_r - d_l`, linear in the unknown edges with the known regressors `phi+-`, so the same
-//! Lyapunov argument as for `W_t` applies (METHOD.md section 3: the term enters `M e2'` as
+//! Lyapunov argument as for `W_t` applies (docs/method.md section 3: the term enters `M e2'` as
 //! `Dtau - Dtau_hat`, and the update is `Gamma (regressor e2 - sigma estimate)`), and
 //! projection onto a convex set that holds the true edges keeps it. The paper's network cannot
 //! draw that step: its Gaussian nodes are as wide as its 28-dimensional box (width about 22,

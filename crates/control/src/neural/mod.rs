@@ -1,6 +1,6 @@
-//! The paper's adaptive RBF neural controller with deadzone compensation (METHOD.md
+//! The paper's adaptive RBF neural controller with deadzone compensation (docs/method.md
 //! section 3, the paper's eq. 24-27, with METHOD's sign set) and the dynamic-node hooks of
-//! METHOD.md section 4.
+//! docs/method.md section 4.
 //!
 //! # Control law (implemented exactly)
 //!
@@ -46,7 +46,7 @@
 //! with `Gamma = Theta^-1` and `vec(e2 a^T)` the row-major flattening (entry `i n + j` is
 //! `e2_i a_j`), i.e. the gradient of `e2^T f_hat` with respect to the weights. They make the
 //! weight-error cross terms of `V = e2^T M e2 / 2 + sum tr(W~^T Theta W~) / 2` cancel
-//! (METHOD.md section 3, "Derivation"; the paper's printed eq. 27 mixes signs and is not
+//! (docs/method.md section 3, "Derivation"; the paper's printed eq. 27 mixes signs and is not
 //! used). The weights are integrated over each step with `S` and `e2` held (the RBF
 //! layer's integrator, exact decay by default), using the weights before the update for the
 //! output of the step.

@@ -1,5 +1,5 @@
 //! Building the controller's Gaussian RBF layers from their configuration, and the small
-//! helpers that run them inside the law (METHOD.md section 3).
+//! helpers that run them inside the law (docs/method.md section 3).
 
 use admittance_learning::rbf::{GaussianRbfLayer, Placement, RbfConfigError, RbfLayerConfig};
 

@@ -1,4 +1,4 @@
-//! The controller's networks by identifier and the dynamic-node events of METHOD.md
+//! The controller's networks by identifier and the dynamic-node events of docs/method.md
 //! section 4 (discard, grow), with the per-step relevance tracking and growth attempts.
 
 use admittance_learning::rbf::{GaussianRbfLayer, GrowOutcome, GrowthParams};
@@ -50,7 +50,7 @@ impl NetworkId {
     }
 }
 
-/// A request to grow nodes near the trajectory (METHOD.md section 4, "Grow").
+/// A request to grow nodes near the trajectory (docs/method.md section 4, "Grow").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrowthRequest {
@@ -127,7 +127,7 @@ impl NeuralController {
         self.network(id).map_or(0.0, |l| l.weight_norm())
     }
 
-    /// **Discard** (METHOD.md section 4, eq. 29-31): removes from network `id` every node
+    /// **Discard** (docs/method.md section 4, eq. 29-31): removes from network `id` every node
     /// whose tracked activation stayed below `upsilon` over the trailing relevance window
     /// (paper: 0.05); returns how many were removed. Needs relevance tracking
     /// ([`NeuralControllerConfig::track_relevance`](crate::NeuralControllerConfig::track_relevance)); nodes tracked for less than a full
@@ -145,7 +145,7 @@ impl NeuralController {
             .sum()
     }
 
-    /// **Grow** (METHOD.md section 4): arms a request to add `request.nodes` nodes to
+    /// **Grow** (docs/method.md section 4): arms a request to add `request.nodes` nodes to
     /// network `id` near the trajectory. From the next step on, every `interval_steps`
     /// steps the controller tries one addition at the network's current input (see
     /// [`GrowthRequest::params`]) until the count is reached or the network is full. A new

@@ -2,7 +2,7 @@
 
 use admittance_dynamics::{coriolis_matrix, crba, gravity_torque, Data, DimensionError, Model};
 
-/// The "true" lumped function of METHOD.md section 3 / experiment C for a model:
+/// The "true" lumped function of docs/method.md section 3 / experiment C for a model:
 /// `out = M(q) alpha' + C(q, q') alpha + G(q)` (Christoffel-form `C`; no friction).
 /// Uses `data` as workspace; does not allocate.
 pub fn true_lumped_f(

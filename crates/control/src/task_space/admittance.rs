@@ -35,7 +35,7 @@ struct HandReference {
 /// measured joint position and the external-torque estimate.
 pub type TaskSpaceInput<'a> = ReferenceInput<'a>;
 
-/// The task-space admittance model (the paper's eq. 5 on the hand, METHOD.md section 2,
+/// The task-space admittance model (the paper's eq. 5 on the hand, docs/method.md section 2,
 /// task-space variant; issue 16 part 1).
 ///
 /// # Per step
@@ -46,7 +46,7 @@ pub type TaskSpaceInput<'a> = ReferenceInput<'a>;
 ///    origin's velocity and the angular velocity).
 /// 2. **Wrench estimate** `f_ext_hat = J(q)^#T tau_ext_hat` at the *measured* `q`, with
 ///    the damped pseudo-inverse described below (force in N at the tip origin and moment in
-///    N m about it, base axes; `tau_ext = J^T f` is METHOD.md's task-space contact). Only
+///    N m about it, base axes; `tau_ext = J^T f` is docs/method.md's task-space contact). Only
 ///    the rows of the task axes enter `J` (the wrench is estimated on them and is zero on
 ///    the others: a planar arm with task axes x and z reads the force in its plane).
 /// 3. **Admittance** per compliant axis, `M_d dx'' + C_d dx' + G_d dx = f_ext_hat` with

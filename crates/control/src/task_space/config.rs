@@ -1,4 +1,4 @@
-//! Configuration of the task-space admittance (METHOD.md section 2, task-space variant;
+//! Configuration of the task-space admittance (docs/method.md section 2, task-space variant;
 //! issue 16 part 1): axes, gains per axis group, the inverse kinematics, the damping of the
 //! pseudo-inverses and the joint saturation.
 
@@ -171,7 +171,7 @@ impl Default for InverseKinematicsConfig {
     }
 }
 
-/// Where the joint reference is bounded (eq. 7 on each joint, METHOD.md section 2).
+/// Where the joint reference is bounded (eq. 7 on each joint, docs/method.md section 2).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TaskSaturationConfig {

@@ -1,4 +1,4 @@
-//! The admittance on the six task axes (the paper's eq. 5, METHOD.md sign):
+//! The admittance on the six task axes (the paper's eq. 5, docs/method.md sign):
 //!
 //! ```text
 //!     M_d dx'' + C_d dx' + G_d dx = f_ext_hat,      dx = x_r - x_d  (per axis)

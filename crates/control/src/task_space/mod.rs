@@ -1,4 +1,4 @@
-//! The task-space admittance (METHOD.md section 2, task-space variant; the paper's eq. 5 and
+//! The task-space admittance (docs/method.md section 2, task-space variant; the paper's eq. 5 and
 //! eq. 19 `f_ext_hat = J^-T tau_ext_hat`; issue 16 part 1): compliance at the hand, driven
 //! by the joint-space external-torque estimate, mapped back to a joint reference.
 //!

@@ -62,7 +62,7 @@ pub fn baxter() -> Arc<Model> {
     )
 }
 
-/// Actuator deadzone of METHOD.md section 1 (eq. 17), symmetric, unit slopes.
+/// Actuator deadzone of docs/method.md section 1 (eq. 17), symmetric, unit slopes.
 pub fn deadzone(tau: f64, d: f64) -> f64 {
     if tau >= d {
         tau - d

@@ -1,5 +1,5 @@
 //! Articulated-body algorithm: forward dynamics `qddot = M^-1 (tau - C qdot - G)`
-//! (METHOD.md eq. 1 solved for the acceleration; the simulator's plant).
+//! (docs/method.md eq. 1 solved for the acceleration; the simulator's plant).
 
 // Joint index addresses several parallel per-joint arrays; read clearest indexed.
 #![allow(clippy::needless_range_loop)]

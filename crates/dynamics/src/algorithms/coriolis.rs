@@ -1,5 +1,5 @@
 //! The Coriolis matrix C(q, qdot) in Christoffel form, so that `Mdot - 2C` is
-//! skew-symmetric (METHOD.md section 1; the property the controller's stability proof
+//! skew-symmetric (docs/method.md section 1; the property the controller's stability proof
 //! in section 3 relies on).
 //!
 //! Computed in the base frame: with each body's world Jacobian `J_k`, its world inertia

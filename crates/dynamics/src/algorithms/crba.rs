@@ -1,4 +1,4 @@
-//! Composite-rigid-body algorithm: the joint-space inertia matrix M(q) (METHOD.md eq. 1).
+//! Composite-rigid-body algorithm: the joint-space inertia matrix M(q) (docs/method.md eq. 1).
 
 use nalgebra::DMatrix;
 

@@ -1,4 +1,4 @@
-//! The model terms of the generalised momentum observer (METHOD.md section 5, the
+//! The model terms of the generalised momentum observer (docs/method.md section 5, the
 //! baseline): `p = M(q) v`, `C(q, v)^T v` and `G(q)`, in one pass over the chain, without
 //! forming `M` or `C`.
 //!
@@ -29,7 +29,7 @@ use crate::spatial::Motion;
 /// `M(q) v`, `C(q, v)^T v` and `G(q)` into `data.momentum`, `data.coriolis_transpose_v`
 /// and `data.gravity_torque`: the same values as [`crate::crba`] times `v`,
 /// [`crate::coriolis_matrix`] transposed times `v` and [`crate::gravity_torque`] (to
-/// rounding; tested), for the momentum observer's update (METHOD.md section 5).
+/// rounding; tested), for the momentum observer's update (docs/method.md section 5).
 pub fn momentum_observer_terms(
     model: &Model,
     data: &mut Data,

@@ -1,4 +1,4 @@
-//! Recursive Newton-Euler inverse dynamics (METHOD.md eq. 1: the left-hand side
+//! Recursive Newton-Euler inverse dynamics (docs/method.md eq. 1: the left-hand side
 //! `M(q) qddot + C(q, qdot) qdot + G(q)`), and its special cases G(q) and C qdot + G.
 
 use nalgebra::{DVector, Vector3, Vector6};

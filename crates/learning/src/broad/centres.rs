@@ -1,6 +1,6 @@
 //! Centre placement (k-means++ seeding) and width heuristics for the enhancement nodes
-//! (METHOD.md section 5: "centres from the data, e.g. k-means++ or a random subset;
-//! widths from a distance heuristic").
+//! (docs/method.md section 5: centres taken from the data, by k-means++ seeding or a random
+//! subset of the rows; widths from a rule based on distances).
 //!
 //! Centres: k-means++ seeding (D^2 sampling, Arthur and Vassilvitskii 2007) on a uniform
 //! random subsample of the standardised training inputs, without Lloyd iterations.

@@ -1,21 +1,21 @@
-//! Configuration of the broad network fit (METHOD.md sections 5 and 7).
+//! Configuration of the broad network fit (docs/method.md sections 5 and 7).
 
 use super::budget::Budget;
 use super::error::BroadError;
 use serde::{Deserialize, Serialize};
 
 /// Friction-shaped extra inputs, appended to the linear part of the pattern row
-/// (METHOD.md section 7).
+/// (docs/method.md section 7).
 ///
 /// For every chosen input column `c` (the joint velocities q') and every scale `v_k`
 /// the pattern row gets `tanh(x_c / v_k)`, computed on the **raw** (unstandardised)
 /// value, so `v_k` is in the column's physical unit (rad/s).
 ///
-/// Why: the plant's Coulomb friction `Fc tanh(q' / v_s)` (METHOD.md section 1) is nearly a
+/// Why: the plant's Coulomb friction `Fc tanh(q' / v_s)` (docs/method.md section 1) is nearly a
 /// step at q' = 0 (v_s about 0.01 rad/s). Gaussian enhancement nodes on the standardised
 /// [q, q', q''] are smooth on the scale of their widths (about one standard deviation of
 /// q'), so they round the step off, and the observer reached only NRMSE ~0.47 on the
-/// quick simulation of METHOD.md section 7. With a few `tanh(q'/v)` columns the ridge fit
+/// quick simulation of docs/method.md section 7. With a few `tanh(q'/v)` columns the ridge fit
 /// represents the step (any mix of the scales) linearly, which brought it to ~0.14.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrictionFeatures {
@@ -69,7 +69,7 @@ impl FrictionFeatures {
 }
 
 /// Rule that sets the width `eta_j` of each enhancement node `exp(-||X - u_j||^2 / eta_j^2)`
-/// (METHOD.md section 5: "widths from a distance heuristic"). Distances are in the
+/// (docs/method.md section 5: widths from a rule based on distances). Distances are in the
 /// standardised input space.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum WidthRule {
@@ -111,7 +111,7 @@ pub enum GramStrategy {
 pub struct BroadConfig {
     /// Number of enhancement (Gaussian) nodes L. The paper uses 1000.
     pub nodes: usize,
-    /// Friction-shaped extra inputs (METHOD.md section 7).
+    /// Friction-shaped extra inputs (docs/method.md section 7).
     pub friction: FrictionFeatures,
     /// Size of the random subsample of training rows that k-means++ seeding draws the
     /// centres from (clamped to N). Default 20,000 (20 candidates per node at L = 1000).

@@ -1,5 +1,5 @@
-//! Data views and input standardisation (METHOD.md section 5: "input X = [q, q', q'']
-//! (standardised with training statistics)").
+//! Data views and input standardisation (docs/method.md section 5: the input
+//! X = [q, q', q''] is standardised with the mean and spread of the training data).
 
 use super::error::BroadError;
 use serde::{Deserialize, Serialize};
@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 /// A borrowed data set: `n_samples` rows of `d_in` inputs and `d_out` targets, both
 /// row-major (`inputs[i * d_in + k]` is input column `k` of sample `i`).
 ///
-/// For the observer of METHOD.md section 5 a row is `X = [q, q', q'']` (d_in = 3n) and the
+/// For the observer of docs/method.md section 5 a row is `X = [q, q', q'']` (d_in = 3n) and the
 /// target is the measured free-motion torque `tau` (d_out = n). Construction checks the
 /// shapes and that every value is finite and within [`MAX_ABS_DATA_VALUE`], so the fitting
 /// code never sees NaN and its sums of squares never overflow.

@@ -1,4 +1,4 @@
-//! The pattern row `a(x) = [X_std | friction features | 1 | xi(X)]` (METHOD.md section 5,
+//! The pattern row `a(x) = [X_std | friction features | 1 | xi(X)]` (docs/method.md section 5,
 //! plus the friction-shaped inputs of section 7), for one sample (prediction) or for a
 //! block of samples (training, the Gram accumulation).
 
@@ -11,7 +11,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use serde::{Deserialize, Serialize};
 
-/// The enhancement nodes `xi_j(X) = exp(-||X - u_j||^2 / eta_j^2)` of METHOD.md section 5
+/// The enhancement nodes `xi_j(X) = exp(-||X - u_j||^2 / eta_j^2)` of docs/method.md section 5
 /// (eq. 9 form): centres `u_j` in **standardised** input units (row-major, L x d_in) and
 /// widths `eta_j > 0`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -1,6 +1,6 @@
 //! Fitting the flat RBF network on free-motion data: standardisation, centres, one
 //! blocked Gram pass, a Cholesky solve per candidate lambda, the choice on validation data
-//! (METHOD.md section 5).
+//! (docs/method.md section 5).
 
 use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
@@ -94,7 +94,7 @@ fn check_same_widths(train: &Dataset<'_>, other: &Dataset<'_>) -> Result<(), Bro
     Ok(())
 }
 
-/// Fits the flat RBF network of METHOD.md section 5 on `train`:
+/// Fits the flat RBF network of docs/method.md section 5 on `train`:
 /// standardisation with the training statistics, centres by k-means++ seeding on a random
 /// subsample, widths by `config.widths`, one blocked pass accumulating `G = A^T A` and
 /// `A^T Y`, then for every lambda of `config.lambda_grid` a Cholesky solve of

@@ -1,6 +1,6 @@
 //! Blocked passes over a data set: the N x P pattern matrix A is never held whole.
 //! Each pass forms the pattern a block of rows at a time and hands it to a consumer: the
-//! Gram accumulation `G += A_b^T A_b`, `A^T Y += A_b^T Y_b` (METHOD.md section 5, the
+//! Gram accumulation `G += A_b^T A_b`, `A^T Y += A_b^T Y_b` (docs/method.md section 5, the
 //! normal equations of the ridge solution), the cross terms of a node growth, or
 //! validation predictions.
 //!
@@ -245,7 +245,7 @@ struct GramPart {
 }
 
 /// G = A^T A (lower triangle, symmetric rank-k updates), A^T Y and the target sums:
-/// the normal equations of METHOD.md section 5, accumulated block by block.
+/// the normal equations of docs/method.md section 5, accumulated block by block.
 pub(crate) fn accumulate_gram(
     fm: &FeatureMap,
     data: &Dataset<'_>,

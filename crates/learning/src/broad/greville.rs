@@ -1,4 +1,4 @@
-//! The paper's pseudo-inverse (Greville) form of incremental growth, METHOD.md section 5
+//! The paper's pseudo-inverse (Greville) form of incremental growth, docs/method.md section 5
 //! (eq. 14-16 with the typo of eq. 15 fixed). It needs the whole pattern matrix A and its
 //! pseudo-inverse in memory (N x P each), so it is meant for small problems, as a
 //! reference for the exact ridge route of [`BroadModel::grow`](super::BroadModel::grow),
@@ -78,7 +78,7 @@ pub fn pseudo_inverse(a: MatRef<'_, f64>, rcond: f64) -> Result<Mat<f64>, BroadE
 }
 
 /// Adds the columns of `new_cols` (N x k) to A one at a time with the Greville update of
-/// METHOD.md section 5 (eq. 14-16). `a` (N x P), `a_pinv` (P x N) and `w` (P x d_out) are
+/// docs/method.md section 5 (eq. 14-16). `a` (N x P), `a_pinv` (P x N) and `w` (P x d_out) are
 /// the current pattern matrix, its pseudo-inverse and weights, `y` the targets (N x d_out).
 /// `tol` decides `c == 0`: `||c|| <= tol * ||a_new||` (e.g. 1e-10).
 pub fn greville_add_columns(

@@ -1,5 +1,5 @@
 //! Incremental growth of a fitted network by k enhancement nodes without retraining
-//! (METHOD.md section 5, eq. 14-16 in their exact ridge form).
+//! (docs/method.md section 5, eq. 14-16 in their exact ridge form).
 
 use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
@@ -41,7 +41,7 @@ pub enum GrowthSpec {
     Nodes(NodeSet),
     /// `count` nodes by continuing the k-means++ seeding with the existing centres as
     /// already chosen: new centres land where the data is far from every current centre,
-    /// the region METHOD.md section 4 grows into. Drawn from a fresh subsample of
+    /// the region docs/method.md section 4 grows into. Drawn from a fresh subsample of
     /// `config.centre_subsample` rows with a ChaCha8 generator seeded by `seed`; widths by
     /// `config.widths` with all centres as neighbours (old widths unchanged).
     KMeansPlusPlus {
@@ -53,7 +53,7 @@ pub enum GrowthSpec {
 }
 
 impl BroadModel {
-    /// Incremental growth by k enhancement nodes without retraining (METHOD.md section 5,
+    /// Incremental growth by k enhancement nodes without retraining (docs/method.md section 5,
     /// eq. 14-16 in its exact ridge form): one pass over the training data computes only
     /// the k new rows of the Gram, `A_new^T [A_old | A_new]`, and `A_new^T Y`; the stored
     /// Cholesky factor is extended by the Schur-complement block

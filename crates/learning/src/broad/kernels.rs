@@ -268,7 +268,7 @@ pub(crate) fn has_avx2_fma() -> bool {
 }
 
 /// `col[j] <- exp(-max(0, xn + un[j] + col[j]) * inv_eta2[j])`: turns `-2 x.u_j`
-/// (from a GEMM) into the Gaussian activation of METHOD.md section 5 (0 below about
+/// (from a GEMM) into the Gaussian activation of docs/method.md section 5 (0 below about
 /// 1.7e-154, see `GAUSS_FLUSH`).
 #[inline]
 pub(crate) fn gauss_from_neg2dots(col: &mut [f64], xn: f64, un: &[f64], inv_eta2: &[f64]) {

@@ -1,5 +1,5 @@
 //! The trained flat RBF network: its parts, allocation-free prediction, evaluation and
-//! re-solving for another lambda (METHOD.md section 5). Fitting is in `fit.rs`, growth in
+//! re-solving for another lambda (docs/method.md section 5). Fitting is in `fit.rs`, growth in
 //! `growth.rs`.
 
 use super::config::{BroadConfig, FrictionFeatures, GramStrategy};
@@ -12,7 +12,7 @@ use super::provenance::Provenance;
 use super::solve::{factor, solve, sse_from_gram};
 use faer::{Mat, MatRef, Par};
 
-/// What the model keeps to grow without retraining (METHOD.md section 5, "incremental
+/// What the model keeps to grow without retraining (docs/method.md section 5, "incremental
 /// growth"): the Gram matrix `G = A^T A` (lower triangle), `A^T Y`, the Cholesky factor of
 /// `G + lambda D` at the chosen lambda, and fingerprints of the training data.
 #[derive(Clone, Debug)]
@@ -40,7 +40,7 @@ impl Workspace {
 }
 
 /// A trained flat ("broad") RBF network, `f_hat(x) = W^T a(x)` with the pattern row
-/// `a(x) = [X_std | friction features | 1 | xi(X)]` (METHOD.md section 5 and section 7).
+/// `a(x) = [X_std | friction features | 1 | xi(X)]` (docs/method.md section 5 and section 7).
 #[derive(Clone, Debug)]
 pub struct BroadModel {
     pub(crate) fm: FeatureMap,
@@ -237,7 +237,7 @@ impl BroadModel {
         Ok(())
     }
 
-    /// Pattern row `a(x)` of one raw input (length P), METHOD.md section 5.
+    /// Pattern row `a(x)` of one raw input (length P), docs/method.md section 5.
     pub fn pattern_into(&self, x: &[f64], a: &mut [f64]) -> Result<(), BroadError> {
         self.check_input(x)?;
         if a.len() != self.pattern_width() {
@@ -251,7 +251,7 @@ impl BroadModel {
         Ok(())
     }
 
-    /// `out = W^T a(x)`: the estimate `f_hat(q, q', q'')` of METHOD.md section 5 for one
+    /// `out = W^T a(x)`: the estimate `f_hat(q, q', q'')` of docs/method.md section 5 for one
     /// raw input row. Allocation-free when `ws` comes from [`workspace`](Self::workspace)
     /// (a workspace made before a [`grow`](Self::grow) is enlarged once).
     pub fn predict_into(

@@ -52,7 +52,7 @@ mod hex_u64 {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TrainingTarget {
-    /// The free-motion torque `tau(q, q', q'')` (observer kind `learned`, METHOD.md
+    /// The free-motion torque `tau(q, q', q'')` (observer kind `learned`, docs/method.md
     /// section 5, eq. 19).
     FreeMotionTorque,
     /// What the nominal model misses, `tau - RNEA_nominal(q, q', q'')` (observer kind

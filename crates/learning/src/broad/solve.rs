@@ -1,6 +1,6 @@
 //! Ridge solution of the normal equations and its Cholesky-extension update
-//! (METHOD.md section 5: `W = (lambda I + A^T A)^-1 A^T Y` and "a block update of the
-//! normal equations (Schur complement / Cholesky extension)").
+//! (docs/method.md section 5: `W = (lambda I + A^T A)^-1 A^T Y`, grown by a block-wise update
+//! of the normal equations: Schur complement, extending their Cholesky factor).
 //!
 //! The bias column is **not** regularised: the system is `(A^T A + lambda D) W = A^T Y`
 //! with D the identity except a zero at the bias column. The intercept absorbs the mean

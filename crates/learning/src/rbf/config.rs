@@ -1,4 +1,4 @@
-//! Layer description (serde) and centre placement (METHOD.md section 3, last paragraph).
+//! Layer description (serde) and centre placement (docs/method.md section 3, last paragraph).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::RbfConfigError;
 
 /// How the weights are integrated over one step `dt` of the update law
-/// `W' = Gamma (S(Z) e^T - sigma W)` (METHOD.md section 3), with `S(Z)` and `e` held
+/// `W' = Gamma (S(Z) e^T - sigma W)` (docs/method.md section 3), with `S(Z)` and `e` held
 /// constant over the step (zero-order hold).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -23,8 +23,8 @@ pub enum Integrator {
     ExactDecay,
 }
 
-/// Where the initial centres go (METHOD.md section 3: "on a lattice or sampled inside a box
-/// given per input dimension").
+/// Where the initial centres go (docs/method.md section 3: on a lattice or sampled, inside a
+/// box given per input dimension).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Placement {
@@ -60,7 +60,7 @@ impl Default for Placement {
     }
 }
 
-/// Parameters of node growth (METHOD.md section 4, "Grow"; eq. 20-22).
+/// Parameters of node growth (docs/method.md section 4, "Grow"; eq. 20-22).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrowthParams {
@@ -75,7 +75,7 @@ pub struct GrowthParams {
     pub min_spacing: f64,
     /// Where the new centre goes on the segment from the nearest centre `u_near` to `Z`:
     /// `u_new = u_near + step_fraction (Z - u_near)`. Eq. 20 as printed adds a distance to
-    /// a point; METHOD.md section 4 fixes it to this segment form. The default `1.0` places
+    /// a point; docs/method.md section 4 fixes it to this segment form. The default `1.0` places
     /// the new centre at `Z`.
     #[serde(default = "one")]
     pub step_fraction: f64,
@@ -128,7 +128,7 @@ fn default_max_neighbours() -> usize {
     16
 }
 
-/// Description of one Gaussian RBF layer (METHOD.md section 3: eq. 9 activations, the
+/// Description of one Gaussian RBF layer (docs/method.md section 3: eq. 9 activations, the
 /// sigma-modified update law; section 4: dynamic nodes).
 ///
 /// JSON example (unknown fields are rejected):
@@ -156,7 +156,7 @@ pub struct RbfLayerConfig {
     pub capacity: usize,
     /// Number of outputs `n` (joints).
     pub outputs: usize,
-    /// Adaptation gain `Gamma = Theta^-1` (METHOD.md section 3; experiment C: Theta = 0.03).
+    /// Adaptation gain `Gamma = Theta^-1` (docs/method.md section 3; experiment C: Theta = 0.03).
     pub gamma: f64,
     /// Sigma-modification `sigma` (experiment C: 0.035).
     pub sigma: f64,
@@ -270,7 +270,7 @@ pub(crate) fn check_box(lower: &[f64], upper: &[f64]) -> Result<(), RbfConfigErr
     Ok(())
 }
 
-/// Lattice centres over the box `[lower, upper]` (METHOD.md section 3): `points[k]` evenly
+/// Lattice centres over the box `[lower, upper]` (docs/method.md section 3): `points[k]` evenly
 /// spaced values per dimension, end points included (`lower[k] + (upper[k] - lower[k]) j /
 /// (points[k] - 1)`, or the midpoint when `points[k] == 1`). Returned flat and node-major,
 /// in lexicographic order with the **last** dimension varying fastest.
@@ -324,7 +324,7 @@ pub fn lattice_centres(
     Ok(out)
 }
 
-/// `count` centres sampled uniformly in the box (METHOD.md section 3), flat and node-major.
+/// `count` centres sampled uniformly in the box (docs/method.md section 3), flat and node-major.
 /// Coordinate `k` of each centre is `lower[k] + (upper[k] - lower[k]) u` with `u` a uniform
 /// `[0, 1)` draw from `ChaCha8Rng::seed_from_u64(seed)`, drawn node by node, dimension by
 /// dimension: the same seed always gives the same centres.

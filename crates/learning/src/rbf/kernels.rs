@@ -474,7 +474,7 @@ unsafe fn update_avx2(act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, g
     update_impl::<true>(act, weights, e, decay, gain)
 }
 
-/// One integration step of the update law, `W <- decay W + gain S e^T` (METHOD.md section 3).
+/// One integration step of the update law, `W <- decay W + gain S e^T` (docs/method.md section 3).
 pub(crate) fn update(isa: Isa, act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
     dispatch!(
         isa,

@@ -11,15 +11,15 @@ use super::{RbfConfigError, RbfError};
 /// [`RbfLayerConfig`] for their meaning; the defaults are the same as there).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LayerOptions {
-    /// Adaptation gain `Gamma = Theta^-1` (METHOD.md section 3).
+    /// Adaptation gain `Gamma = Theta^-1` (docs/method.md section 3).
     pub gamma: f64,
-    /// Sigma-modification `sigma` (METHOD.md section 3).
+    /// Sigma-modification `sigma` (docs/method.md section 3).
     pub sigma: f64,
     /// Weight integrator.
     pub integrator: Integrator,
     /// Width given to a node grown in an empty layer.
     pub default_width: f64,
-    /// Relevance window `W` in tracked steps (METHOD.md section 4).
+    /// Relevance window `W` in tracked steps (docs/method.md section 4).
     pub relevance_window: usize,
     /// Activations below this are computed as zero (node skipped).
     pub min_activation: f64,
@@ -92,7 +92,7 @@ fn inverse_width_sq(width: f64) -> Option<f64> {
     (width.is_finite() && width > 0.0 && inv.is_finite() && inv > 0.0).then_some(inv)
 }
 
-/// Result of [`GaussianRbfLayer::maybe_grow`] (METHOD.md section 4, eq. 20-22).
+/// Result of [`GaussianRbfLayer::maybe_grow`] (docs/method.md section 4, eq. 20-22).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum GrowOutcome {
     /// A node was added at `index` (always the last index, `len() - 1`).
@@ -129,7 +129,7 @@ impl GrowOutcome {
     }
 }
 
-/// A Gaussian RBF layer with preallocated capacity and dynamic nodes (METHOD.md sections 3-4).
+/// A Gaussian RBF layer with preallocated capacity and dynamic nodes (docs/method.md sections 3-4).
 ///
 /// * evaluation: `s_i(Z) = exp(-||Z - u_i||^2 / eta_i^2)` (eq. 9), `f_hat = W^T S(Z)`
 ///   ([`activate`](Self::activate), [`output`](Self::output), [`evaluate`](Self::evaluate),
@@ -194,7 +194,7 @@ pub struct GaussianRbfLayer {
 }
 
 impl GaussianRbfLayer {
-    /// Builds the layer described by `config` (METHOD.md section 3: centres on a lattice,
+    /// Builds the layer described by `config` (docs/method.md section 3: centres on a lattice,
     /// sampled in a box, or listed), with zero weights.
     pub fn from_config(config: &RbfLayerConfig) -> Result<Self, RbfConfigError> {
         let centres = config.centres()?;
@@ -220,7 +220,7 @@ impl GaussianRbfLayer {
 
     /// An empty layer (no nodes) with room for `capacity` nodes of input dimension `dim` and
     /// `outputs` outputs; nodes come from [`add_node`](Self::add_node) or
-    /// [`maybe_grow`](Self::maybe_grow) (METHOD.md section 4).
+    /// [`maybe_grow`](Self::maybe_grow) (docs/method.md section 4).
     pub fn empty(
         dim: usize,
         outputs: usize,
@@ -231,7 +231,7 @@ impl GaussianRbfLayer {
     }
 
     /// A layer with the given initial centres (flat, node-major, `k * dim` values), all of
-    /// width `width` (eta of eq. 9) and zero weight (METHOD.md section 3).
+    /// width `width` (eta of eq. 9) and zero weight (docs/method.md section 3).
     pub fn with_centres(
         dim: usize,
         outputs: usize,
@@ -350,7 +350,7 @@ impl GaussianRbfLayer {
         self.len == 0
     }
 
-    /// Capacity `L_max` (METHOD.md section 4: the bound that keeps the node count finite).
+    /// Capacity `L_max` (docs/method.md section 4: the bound that keeps the node count finite).
     pub fn capacity(&self) -> usize {
         self.capacity
     }
@@ -371,7 +371,7 @@ impl GaussianRbfLayer {
         &self.widths[..self.len]
     }
 
-    /// Weights `W` (L x n, METHOD.md section 0/3) of the active nodes, flat and node-major
+    /// Weights `W` (L x n, docs/method.md section 0/3) of the active nodes, flat and node-major
     /// (`len() * outputs()` values; row `i` is `W_i`, the weights from node `i` to the `n`
     /// outputs).
     pub fn weights(&self) -> &[f64] {
@@ -390,7 +390,7 @@ impl GaussianRbfLayer {
     }
 
     /// Frobenius norm `||W||_F` of the active weights (the quantity that sigma-modification
-    /// keeps bounded, METHOD.md section 3).
+    /// keeps bounded, docs/method.md section 3).
     pub fn weight_norm(&self) -> f64 {
         self.weights().iter().map(|w| w * w).sum::<f64>().sqrt()
     }
@@ -411,7 +411,7 @@ impl GaussianRbfLayer {
         self.activations_valid.then_some(&self.last_input[..])
     }
 
-    /// Tracked relevance of node `i` (METHOD.md section 4): the largest activation over the
+    /// Tracked relevance of node `i` (docs/method.md section 4): the largest activation over the
     /// trailing window, see [`track_relevance`](Self::track_relevance).
     pub fn relevance(&self, i: usize) -> Option<f64> {
         (i < self.len).then(|| self.relevance_current[i].max(self.relevance_previous[i]))
@@ -457,7 +457,7 @@ impl GaussianRbfLayer {
         self.nn_index.len()
     }
 
-    /// Sets `Gamma` and `sigma` (METHOD.md section 3). Both must be finite and `>= 0`.
+    /// Sets `Gamma` and `sigma` (docs/method.md section 3). Both must be finite and `>= 0`.
     pub fn set_gains(&mut self, gamma: f64, sigma: f64) -> Result<(), RbfError> {
         for g in [gamma, sigma] {
             if !(g.is_finite() && g >= 0.0) {
@@ -513,7 +513,7 @@ impl GaussianRbfLayer {
         }
     }
 
-    /// Computes and stores `S(Z)` (eq. 9, METHOD.md section 3) for the active nodes.
+    /// Computes and stores `S(Z)` (eq. 9, docs/method.md section 3) for the active nodes.
     ///
     /// On a wrong length or a non-finite `Z` it returns an error and invalidates the stored
     /// activations, so that a following [`adapt`](Self::adapt) is refused rather than
@@ -561,7 +561,7 @@ impl GaussianRbfLayer {
     }
 
     /// `f_hat(z) = W^T S(z)` at an arbitrary input without touching the stored activations,
-    /// relevance or weights (for measuring the approximation error, METHOD.md section 6 C).
+    /// relevance or weights (for measuring the approximation error, docs/method.md section 6 C).
     pub fn predict(&self, z: &[f64], out: &mut [f64]) -> Result<(), RbfError> {
         Self::check_len("output", self.outputs, out.len())?;
         self.check_input(z)?;

@@ -108,8 +108,23 @@ fn per_variant(folder: &RunFolder, name: &str, unit: &str) -> Option<String> {
     (!parts.is_empty()).then(|| parts.join("; "))
 }
 
+/// When something acts on the arm, from the run folder's own timing: the scenario's
+/// environment windows, else where the true external torque is non-zero (the MuJoCo
+/// co-simulation's push or wall) -- the spans the figures shade. `"8-22 s"`, to 0.1 s.
+fn acting_window(folder: &RunFolder) -> Option<String> {
+    let v = folder.variants.first()?;
+    let spans = crate::figures::contact_spans(folder, v);
+    let (from, to) = (spans.first()?.from, spans.last()?.to);
+    let tenth = |x: f64| {
+        let text = format!("{:.1}", (x * 10.0).round() / 10.0);
+        text.strip_suffix(".0").map_or(text.clone(), str::to_string)
+    };
+    Some(format!("{}-{} s", tenth(from), tenth(to)))
+}
+
 fn admittance(folder: &RunFolder) -> (String, Vec<Row>) {
-    let claim = "A network trained on free motion estimates the external torque without a force sensor (Figs 15, 17) well enough to drive the admittance model: the reference yields while the environment acts (12-30 s, Figs 18-19), and the saturation keeps it inside its bound (Fig 20).";
+    let when = acting_window(folder).map_or(String::new(), |w| format!("{w}, "));
+    let claim = format!("A network trained on free motion estimates the external torque without a force sensor (Figs 15, 17) well enough to drive the admittance model: the reference yields while the environment acts ({when}Figs 18-19), and the saturation keeps it inside its bound (Fig 20).");
     let mut rows = Vec::new();
     if let Some(text) = per_variant(folder, m::EXTERNAL_TORQUE_NRMSE, "") {
         rows.push(row(
@@ -168,7 +183,7 @@ fn admittance(folder: &RunFolder) -> (String, Vec<Row>) {
             ));
         }
     }
-    (claim.into(), rows)
+    (claim, rows)
 }
 
 fn dynamic_nodes(folder: &RunFolder) -> (String, Vec<Row>) {

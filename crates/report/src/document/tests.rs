@@ -287,3 +287,47 @@ fn the_html_is_well_formed_and_self_contained() {
         text.matches("</table>").count()
     );
 }
+
+#[test]
+fn the_admittance_claim_takes_its_window_from_the_run() {
+    // The co-simulation's push from 3 s to 6 s (no environment in scenario.toml: the window is
+    // where the true external torque is non-zero), 0.5 s samples.
+    let t: Vec<f64> = (0..20).map(|k| 0.5 * k as f64).collect();
+    let push: Vec<f64> = t
+        .iter()
+        .map(|&x| if (3.0..=6.0).contains(&x) { 1.0 } else { 0.0 })
+        .collect();
+    let columns = vec![
+        "t".to_string(),
+        "tau_ext.left_s0".into(),
+        "tau_ext.left_s1".into(),
+    ];
+    let table = Table::from_columns(columns, vec![t.clone(), push, vec![0.0; 20]]);
+    let v = Variant {
+        name: "oracle".into(),
+        metrics: json!({"external_torque_nrmse": 0.03})
+            .as_object()
+            .cloned()
+            .unwrap(),
+        table,
+    };
+    let mut mujoco = folder("mujoco_franka_panda", vec![v], "");
+    mujoco.plant = Some("mujoco".into());
+    let top = opening(&mujoco);
+    assert!(
+        top.contains("while the environment acts (3-6 s, Figs 18-19)"),
+        "{top}"
+    );
+    assert!(!top.contains("12-30"), "{top}");
+    // Experiment B's own scenario: its environment's window.
+    let b = folder(
+        "admittance",
+        vec![variant("learned", json!({"external_torque_nrmse": 0.46}))],
+        "[[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 1.5\nt_end = 7\n",
+    );
+    let top = opening(&b);
+    assert!(
+        top.contains("while the environment acts (1.5-7 s, Figs 18-19)"),
+        "{top}"
+    );
+}

@@ -18,6 +18,7 @@ mod model;
 mod observer;
 
 pub use catalogue::{PaperFigure, PAPER_FIGURES};
+pub use common::contact_spans;
 pub use common::short as short_name;
 #[cfg(test)]
 pub use model::Marker;

@@ -120,7 +120,7 @@ pub struct TrajectorySpec {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ControllerKind {
-    /// The paper's adaptive neural controller (METHOD.md section 3).
+    /// The paper's adaptive neural controller (docs/method.md section 3).
     Neural,
     /// Joint PD (optionally with nominal gravity compensation).
     Pd,
@@ -144,7 +144,7 @@ pub struct ControllerSpec {
     /// Settings of computed torque.
     #[serde(default)]
     pub computed_torque: Option<ComputedTorqueConfig>,
-    /// Whether the control law subtracts the external-torque estimate (METHOD.md section 3,
+    /// Whether the control law subtracts the external-torque estimate (docs/method.md section 3,
     /// the paper's eq. 26: `tau = ... - tau_ext_hat`). Default true. With false and an
     /// admittance model, the estimate acts only through the compliant reference
     /// (docs/experiments.md shows both on experiment B).
@@ -161,7 +161,7 @@ pub enum ObserverKind {
     None,
     /// The true external torque of the plant (an upper bound for any observer).
     Oracle,
-    /// The generalised-momentum observer with a nominal model (METHOD.md section 5,
+    /// The generalised-momentum observer with a nominal model (docs/method.md section 5,
     /// baseline): settings in `[observer.momentum]`, model error in `nominal_inertia_scale`.
     Momentum,
     /// The paper's learned observer (eq. 19): a flat RBF network trained on free-motion
@@ -200,7 +200,7 @@ pub struct TrainingSpec {
     /// Enhancement (Gaussian) nodes; the paper uses 1000.
     #[serde(default = "default_nodes")]
     pub nodes: usize,
-    /// Friction-shaped inputs `tanh(qdot / v)` beside the Gaussian nodes (METHOD.md
+    /// Friction-shaped inputs `tanh(qdot / v)` beside the Gaussian nodes (docs/method.md
     /// section 7).
     #[serde(default)]
     pub friction_features: bool,
@@ -264,7 +264,7 @@ pub struct ObserverSpec {
     #[serde(default = "unit")]
     pub nominal_inertia_scale: f64,
     /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
-    /// but `oracle` (METHOD.md sections 5 and 7); 0 disables it. Default 0.
+    /// but `oracle` (docs/method.md sections 5 and 7); 0 disables it. Default 0.
     #[serde(default)]
     pub cutoff_hz: f64,
     /// Cut-off (Hz) of a second 2nd-order low-pass on the angles and torques every observer
@@ -321,7 +321,7 @@ fn yes() -> bool {
     true
 }
 
-/// Dynamic-node events of experiment C (METHOD.md section 4).
+/// Dynamic-node events of experiment C (docs/method.md section 4).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DynamicNodesSpec {
@@ -352,7 +352,7 @@ fn one() -> usize {
 #[serde(deny_unknown_fields)]
 pub struct RecordSpec {
     /// Record what the sensors saw at the control rate, in the free-motion data format
-    /// (METHOD.md section 5; columns in docs/outputs.md), to `free_motion.csv`.
+    /// (docs/method.md section 5; columns in docs/outputs.md), to `free_motion.csv`.
     #[serde(default)]
     pub free_motion_csv: bool,
 }

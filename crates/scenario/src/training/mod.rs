@@ -1,6 +1,6 @@
 //! The networks of the learned observers (`observer.kind = "learned"` or `"hybrid"`),
 //! obtained at the start of a run: from the cache when the data and every setting match,
-//! otherwise trained on free-motion data (METHOD.md section 5) that is either simulated
+//! otherwise trained on free-motion data (docs/method.md section 5) that is either simulated
 //! from a data scenario or read from a recorded CSV file (docs/outputs.md).
 //!
 //! What the network learns:

@@ -1,4 +1,4 @@
-//! The actuator between the controller's command and the joint: the deadzone of METHOD.md
+//! The actuator between the controller's command and the joint: the deadzone of docs/method.md
 //! eq. 17 (typo fixed) followed by the effort-limit clamp.
 
 /// The deadzone of one joint:

@@ -1,4 +1,4 @@
-//! Serde configuration of the plant (METHOD.md section 1): what a scenario file says
+//! Serde configuration of the plant (docs/method.md section 1): what a scenario file says
 //! about the simulated arm. Every struct rejects unknown keys and has defaults, so a
 //! scenario only writes what differs from an ideal, frictionless, unperturbed arm.
 //!
@@ -156,7 +156,7 @@ impl Default for FrictionConfig {
     }
 }
 
-/// Actuator deadzone of one joint (METHOD.md eq. 17, typo fixed):
+/// Actuator deadzone of one joint (docs/method.md eq. 17, typo fixed):
 /// `D(tau) = slope_right (tau - d_right)` for `tau >= d_right`, `0` inside, and
 /// `slope_left (tau - d_left)` for `tau <= d_left`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

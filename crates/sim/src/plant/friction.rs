@@ -1,4 +1,4 @@
-//! Joint friction `F(qdot) = Fv qdot + Fc tanh(qdot / v_s)` (METHOD.md section 1), with the
+//! Joint friction `F(qdot) = Fv qdot + Fc tanh(qdot / v_s)` (docs/method.md section 1), with the
 //! derivative and the potential (antiderivative) the implicit velocity update needs.
 
 /// The friction law of one joint (plus any environment damping added on that joint

@@ -2,7 +2,7 @@
 //!
 //! Friction (and environment damping) is a diagonal, monotone, velocity-dependent torque
 //! `phi(v)`, stiff when the Coulomb term's slope `Fc / v_s` is large against a light
-//! joint's inertia (METHOD.md section 7). The update evaluates it at the *new* velocity
+//! joint's inertia (docs/method.md section 7). The update evaluates it at the *new* velocity
 //! (backward Euler in the dissipative term):
 //!
 //! ```text

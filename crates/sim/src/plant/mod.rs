@@ -1,4 +1,4 @@
-//! The plant: the true arm that stands in for the robot (METHOD.md section 1),
+//! The plant: the true arm that stands in for the robot (docs/method.md section 1),
 //!
 //! ```text
 //! M(q) qddot + C(q, qdot) qdot + G(q) + F(qdot) = D(tau) + tau_ext + tau_spring

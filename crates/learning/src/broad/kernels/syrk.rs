@@ -1,5 +1,5 @@
 //! Register-tiled products of packed blocks, `C (+)= A B^T`, for the hot loops of the
-//! ridge fit (METHOD.md section 5, the normal equations): the Gram `G += A_b^T A_b` (its
+//! ridge fit (docs/method.md section 5, the normal equations): the Gram `G += A_b^T A_b` (its
 //! lower triangle; N P^2 / 2 multiply-adds, 2.5e11 at the paper's size), `A_b^T Y_b`
 //! (Y packed as extra rows under the pattern), the cross terms of a node growth
 //! (`A_b^T A_new`), and the `-2 U X^T` products of the Gaussian distances.

@@ -1,4 +1,4 @@
-//! The layer's weight adaptation and relevance tracking (METHOD.md sections 3 and 4).
+//! The layer's weight adaptation and relevance tracking (docs/method.md sections 3 and 4).
 
 use super::super::config::Integrator;
 use super::super::kernels;
@@ -7,12 +7,12 @@ use super::GaussianRbfLayer;
 
 impl GaussianRbfLayer {
     // ------------------------------------------------------------------------------------
-    // Adaptation (METHOD.md section 3)
+    // Adaptation (docs/method.md section 3)
     // ------------------------------------------------------------------------------------
 
-    /// One step of the update law `W' = Gamma (S(Z) e^T - sigma W)` (METHOD.md section 3,
+    /// One step of the update law `W' = Gamma (S(Z) e^T - sigma W)` (docs/method.md section 3,
     /// the corrected eq. 27) over `dt`, with `S(Z)` the stored activations and `e` (length
-    /// `n`, e2 in METHOD.md) held constant over the step. The integrator is
+    /// `n`, e2 in docs/method.md) held constant over the step. The integrator is
     /// [`Integrator::ExactDecay`] by default (`W <- a W + (1 - a)/sigma S e^T`,
     /// `a = exp(-Gamma sigma dt)`) or [`Integrator::Euler`].
     ///
@@ -44,7 +44,7 @@ impl GaussianRbfLayer {
 
     /// One controller step: [`activate`](Self::activate) at `z`, `out = f_hat(z) = W^T S(z)`
     /// with the weights **before** the update (eq. 10), then the update-law step of
-    /// [`adapt`](Self::adapt) with error `e` over `dt` (METHOD.md section 3). The result is
+    /// [`adapt`](Self::adapt) with error `e` over `dt` (docs/method.md section 3). The result is
     /// identical, bit for bit, to `evaluate(z, out)` followed by `adapt(e, dt)`.
     ///
     /// Errors: wrong lengths and a non-finite `z` are reported before anything is written
@@ -96,10 +96,10 @@ impl GaussianRbfLayer {
     }
 
     // ------------------------------------------------------------------------------------
-    // Relevance and discard (METHOD.md section 4, eq. 29-31)
+    // Relevance and discard (docs/method.md section 4, eq. 29-31)
     // ------------------------------------------------------------------------------------
 
-    /// Records the stored activations in the relevance tracker (METHOD.md section 4).
+    /// Records the stored activations in the relevance tracker (docs/method.md section 4).
     ///
     /// Definition (two-bucket trailing maximum): steps are grouped into buckets of `W` =
     /// `relevance_window` tracked steps. Each node keeps the maximum of its activation over

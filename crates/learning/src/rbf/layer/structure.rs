@@ -1,4 +1,4 @@
-//! Changing the layer's nodes: discard, removal, addition and growth (METHOD.md section 4).
+//! Changing the layer's nodes: discard, removal, addition and growth (docs/method.md section 4).
 
 use std::cmp::Ordering;
 
@@ -9,7 +9,7 @@ use super::{inverse_width_sq, GaussianRbfLayer, GrowOutcome};
 
 impl GaussianRbfLayer {
     /// Removes every node whose tracked activation stayed below `threshold` (`Upsilon`,
-    /// METHOD.md section 4 and eq. 31; 0.05 in the paper) over the trailing window, together
+    /// docs/method.md section 4 and eq. 31; 0.05 in the paper) over the trailing window, together
     /// with its centre, width and weights, and returns how many were removed.
     ///
     /// A node is removed iff it has been tracked for at least `W` steps
@@ -29,7 +29,7 @@ impl GaussianRbfLayer {
     }
 
     /// Removes node `i` with its centre, width and weights (compacting in place, order
-    /// preserved; METHOD.md section 4). Returns whether it existed.
+    /// preserved; docs/method.md section 4). Returns whether it existed.
     pub fn remove_node(&mut self, i: usize) -> bool {
         if i >= self.len {
             return false;
@@ -67,11 +67,11 @@ impl GaussianRbfLayer {
     }
 
     // ------------------------------------------------------------------------------------
-    // Growth (METHOD.md section 4, eq. 20-23)
+    // Growth (docs/method.md section 4, eq. 20-23)
     // ------------------------------------------------------------------------------------
 
     /// Adds a node with centre `centre` (length `d`) and width `width`, zero weight and a
-    /// fresh relevance record (METHOD.md section 4, eq. 23). Returns its index (`len() - 1`
+    /// fresh relevance record (docs/method.md section 4, eq. 23). Returns its index (`len() - 1`
     /// after the call). No spacing check. If the layer holds valid activations, the new
     /// node's activation at the last input is computed, so that a following
     /// [`adapt`](Self::adapt) already trains it.
@@ -116,7 +116,7 @@ impl GaussianRbfLayer {
         self.len += 1;
     }
 
-    /// Grows the layer at input `z` when it is poorly covered (METHOD.md section 4, eq.
+    /// Grows the layer at input `z` when it is poorly covered (docs/method.md section 4, eq.
     /// 20-22): with `p_bar` the mean distance from `z` to its `m` nearest centres
     /// (`m = params.neighbours`, clamped to `1..=max_neighbours()` and to `len()`), a node
     /// is added iff `p_bar > Xi` (`params.distance_threshold`), the layer is below capacity,
@@ -124,7 +124,7 @@ impl GaussianRbfLayer {
     ///
     /// The new centre is `u_near + step_fraction (z - u_near)` with `u_near` the nearest
     /// centre: exactly `z` with the default `step_fraction = 1` (the printed eq. 20 adds a
-    /// distance to a point; METHOD.md section 4 fixes it this way). Its width is the mean
+    /// distance to a point; docs/method.md section 4 fixes it this way). Its width is the mean
     /// width of the `m` neighbours (the layer's default width when the layer is empty, where
     /// `p_bar = inf`), its weight row is zero.
     ///

@@ -1,6 +1,6 @@
 """Experiment B on a plant this project did not write: MuJoCo (issue 15, part 3).
 
-``python -m admittance.mujoco --urdf FILE --base LINK --tip LINK --out DIR [--contact push|wall]``
+``python -m admittance.mujoco --urdf FILE [--base LINK] [--tip LINK] --out DIR [--contact push|wall]``
 
 The arm's URDF is loaded into MuJoCo (meshes, visual and collision geometry stripped, the
 arm's own inertials; joints off the base->tip chain fixed at 0, as the Rust loader locks

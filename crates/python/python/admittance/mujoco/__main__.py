@@ -3,10 +3,30 @@
 import argparse
 import sys
 
-from ._cosim import VARIANTS, CosimConfig, run_cosimulation
+#: What the co-simulation needs beyond the package, and the one line that says how to get it.
+MISSING_MUJOCO = (
+    "admittance.mujoco: the co-simulation needs MuJoCo, which is not installed; "
+    "install the package's `mujoco` extra: pip install './crates/python[mujoco]'"
+)
 
 
 def main(argv=None):
+    """The command; returns its exit code (docs/python.md): 0 done, 1 a variant failed,
+    2 bad arguments or MuJoCo missing, 3 a bad input or output path, 130 interrupted."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        # Nothing is written before the last step, and the run folder appears only complete
+        # (a hidden sibling renamed into place): an interrupted run leaves the --out folder
+        # as it was.
+        print("admittance.mujoco: interrupted (Ctrl-C); the --out folder was not written or changed",
+              file=sys.stderr)
+        return 130
+
+
+def _main(argv):
+    from ._cosim import VARIANTS, CosimConfig, run_cosimulation
+
     p = argparse.ArgumentParser(
         prog="python -m admittance.mujoco",
         description="Experiment B (observers driving the admittance model) on the arm's URDF simulated by MuJoCo, "
@@ -14,7 +34,7 @@ def main(argv=None):
     )
     p.add_argument("--urdf", required=True, help="the arm's URDF")
     p.add_argument("--base", help="base link (default: the URDF's root)")
-    p.add_argument("--tip", required=True, help="the hand link")
+    p.add_argument("--tip", help="the hand link (default: as `admittance model` finds it, the end of the URDF's chain)")
     p.add_argument("--out", required=True, help="the run folder to write (refused if it holds files this tool did not write)")
     p.add_argument("--contact", choices=["push", "wall"], default="push")
     p.add_argument("--duration", type=float, default=30.0, help="seconds of the admittance experiment per variant (30)")
@@ -38,6 +58,11 @@ def main(argv=None):
             p.error(f"--{name.replace('_', '-')} {value}: must be a positive number")
     if a.nodes < 1:
         p.error("--nodes must be at least 1")
+    try:
+        import mujoco  # noqa: F401  (the plant; imported again where it is used)
+    except ImportError:
+        print(MISSING_MUJOCO, file=sys.stderr)
+        return 2
     cfg = CosimConfig(
         urdf=a.urdf, base=a.base, tip=a.tip, out=a.out, contact=a.contact, duration=a.duration,
         training_duration=a.training_duration, validation_duration=a.validation_duration,

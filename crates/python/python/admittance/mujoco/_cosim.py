@@ -402,6 +402,7 @@ def write_run_folder(out, cfg, m, results, summary):
     parent = out.parent
     parent.mkdir(parents=True, exist_ok=True)
     partial = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-{os.getpid()}-", dir=parent))
+    partial.chmod(0o777 & ~_umask())  # mkdtemp makes it 0700; a run folder is an ordinary one
     (partial / ".admittance-partial").write_text("")
     joints = m.joint_names
     for variant, (series, _) in results.items():
@@ -458,6 +459,13 @@ def write_run_folder(out, cfg, m, results, summary):
         partial.rename(out)
 
 
+def _umask():
+    """The process's umask (read by setting it, then restoring it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def run_cosimulation(cfg: CosimConfig, log=print):
     """The whole co-simulation; returns the summary dict (also in ``cfg.out``)."""
     out = pathlib.Path(cfg.out)
@@ -465,7 +473,7 @@ def run_cosimulation(cfg: CosimConfig, log=print):
     urdf_text = pathlib.Path(cfg.urdf).read_text()
     m = adm.Model.from_urdf(cfg.urdf, base=cfg.base, tip=cfg.tip)
     n = m.n
-    tip = cfg.tip or _tip_of(m)
+    tip = cfg.tip or m.tip_link  # without --tip, the CLI's rule (Model.from_urdf above)
     rng = np.random.default_rng(cfg.seed)
     q0 = home_pose(m)
     pd = pd_gains(m, q0)
@@ -521,10 +529,6 @@ def run_cosimulation(cfg: CosimConfig, log=print):
     write_run_folder(out, cfg, m, results, summary)
     summary["failures"] = failures
     return summary
-
-
-def _tip_of(m):
-    raise SystemExit("admittance.mujoco: --tip LINK is needed (the hand link of the chain)")
 
 
 def _check_finite(summary, failures):
