@@ -21,17 +21,20 @@ const SCENARIO: &str = concat!(
 const VARIANT: &str = "momentum";
 const N: usize = 7;
 
-/// A ring of inputs: a slow motion around the scenario's pose with measured torques.
-fn inputs() -> Vec<AdmInput> {
-    let pose = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
-    (0..4096)
+/// One trajectory period (12 s) of inputs: the arm tracking the scenario's desired motion
+/// with a small error, with measured torques (index `k` is time `k` ms, so the ring can be
+/// cycled with increasing time).
+fn inputs(rust: &RustLoop) -> Vec<AdmInput> {
+    let (mut q_d, mut qd, mut qdd) = ([0.0; N], [0.0; N], [0.0; N]);
+    (0..12_000)
         .map(|k| {
             let t = k as f64 * 1e-3;
+            rust.desired_at(t, &mut q_d, &mut qd, &mut qdd);
             let mut inp = AdmInput::ZERO;
             inp.n_joints = N as u32;
             inp.flags = ADM_INPUT_TAU;
-            for (i, &p) in pose.iter().enumerate() {
-                inp.q[i] = p + 0.05 * (t * (1.0 + i as f64)).sin();
+            for (i, &p) in q_d.iter().enumerate() {
+                inp.q[i] = p + 0.01 * (t * (1.0 + i as f64)).sin();
                 inp.tau[i] = 0.5 * (3.0 * t).sin();
             }
             inp
@@ -40,9 +43,6 @@ fn inputs() -> Vec<AdmInput> {
 }
 
 fn bench(c: &mut Criterion) {
-    let ring = inputs();
-    let mut group = c.benchmark_group("ffi_step");
-
     let mut rust = RustLoop::new(&LoopSettings {
         scenario: Path::new(SCENARIO),
         variant: Some(VARIANT),
@@ -50,6 +50,8 @@ fn bench(c: &mut Criterion) {
         wrench_damping: None,
     })
     .expect("scenario");
+    let ring = inputs(&rust);
+    let mut group = c.benchmark_group("ffi_step");
     let mut k = 0usize;
     group.bench_function("rust_loop_step", |b| {
         b.iter(|| {

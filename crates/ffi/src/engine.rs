@@ -362,3 +362,36 @@ impl Wrench {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A torque that a hand wrench produces, `tau = J^T f`, gives that wrench back, in base
+    /// axes and (rotated) in the tip's.
+    #[test]
+    fn wrench_inverts_the_jacobian_transpose() {
+        let urdf = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../models/baxter_left_arm.urdf"
+        );
+        let model = Model::from_urdf_file(urdf.as_ref(), Some("base"), Some("left_hand")).unwrap();
+        let q = [0.1, -0.9, 1.1, 1.8, -0.6, 1.0, -0.4];
+        let f = Vector6::new(3.0, -2.0, 5.0, 0.4, -0.3, 0.2);
+        let mut data = Data::new(&model);
+        let j = tip_jacobian(&model, &mut data, &q).unwrap().clone();
+        let tau: Vec<f64> = (0..7).map(|k| j.column(k).dot(&f)).collect();
+        let mut w = Wrench::new(&model, 1e-6).unwrap();
+        w.update(&model, &q, &tau);
+        assert!((w.base - f).norm() < 1e-6, "{} vs {f}", w.base);
+        let r = data.frame_placements[model.tip_frame].rotation;
+        let force = r.transpose() * f.fixed_rows::<3>(0);
+        let moment = r.transpose() * f.fixed_rows::<3>(3);
+        assert!((w.tip.fixed_rows::<3>(0) - force).norm() < 1e-6);
+        assert!((w.tip.fixed_rows::<3>(3) - moment).norm() < 1e-6);
+        // A non-finite estimate keeps the last value.
+        w.update(&model, &q, &[f64::NAN; 7]);
+        assert!((w.base - f).norm() < 1e-6);
+        assert!(Wrench::new(&model, -1.0).is_err());
+    }
+}
