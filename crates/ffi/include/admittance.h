@@ -219,7 +219,7 @@ uint32_t adm_abi_version(void);
 struct AdmHandle *adm_create(const struct AdmConfig *config);
 
 // One control period: reads `input`, writes every field of `output`. Real-time: no
-// allocation, no lock, no system call; a panic inside is caught (`ADM_ERR_PANIC`).
+// allocation, no lock, no blocking call; a panic inside is caught (`ADM_ERR_PANIC`).
 // Returns `ADM_OK`, `ADM_FAULT` (the safe hold was written: still send it) or a negative
 // `ADM_ERR_*`, after which `output` holds the last good step's output and
 // `adm_last_error(handle, ...)` says why.

@@ -148,7 +148,7 @@ unsafe fn create(config: *const AdmConfig) -> Result<AdmHandle, String> {
 }
 
 /// One control period: reads `input`, writes every field of `output`. Real-time: no
-/// allocation, no lock, no system call; a panic inside is caught (`ADM_ERR_PANIC`).
+/// allocation, no lock, no blocking call; a panic inside is caught (`ADM_ERR_PANIC`).
 /// Returns `ADM_OK`, `ADM_FAULT` (the safe hold was written: still send it) or a negative
 /// `ADM_ERR_*`, after which `output` holds the last good step's output and
 /// `adm_last_error(handle, ...)` says why.
@@ -348,9 +348,4 @@ pub unsafe extern "C" fn adm_joint_name(
 /// inside the boundary, to test the panic path.
 pub fn adm_test_panic_next_step(handle: &mut AdmHandle) {
     handle.panic_next = true;
-}
-
-/// The Rust loop behind a handle (Rust only: benchmarks and tests compare with it).
-pub fn adm_engine(handle: &mut AdmHandle) -> &mut RustLoop {
-    &mut handle.engine
 }
