@@ -41,6 +41,7 @@ mod metrics;
 mod node_events;
 mod progress;
 mod recorder;
+mod robot;
 mod run_folder;
 mod runner;
 mod series;
@@ -59,6 +60,7 @@ pub use health::Divergence;
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
+pub use robot::{robot_loop, RobotLoop};
 pub use run_folder::{
     check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants, write_series_csv,
     RunError, RunSummary,
