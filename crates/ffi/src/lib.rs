@@ -1,6 +1,6 @@
 //! The 1 kHz loop of `admittance` from C and C++ (issue 24): a C ABI over the loop that the
 //! scenario runner, the Python package and the README's example step (observer ->
-//! admittance model -> controller, METHOD.md sections 2-5).
+//! admittance model -> controller, docs/method.md sections 2-5).
 //!
 //! ```c
 //! AdmConfig config = {0};

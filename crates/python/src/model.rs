@@ -45,7 +45,7 @@ impl PyModel {
     }
 
     /// A joint vector argument, checked for shape and finiteness.
-    fn joint_vector(&self, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+    pub(crate) fn joint_vector(&self, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
         let v = vector(obj, name, self.dof(), "one value per joint, in chain order")?;
         require_finite(&v, name)?;
         Ok(v)

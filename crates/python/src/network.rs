@@ -35,7 +35,7 @@ struct TrainOptions {
 }
 
 /// Free-motion data as given: a CSV file (read later, without the GIL) or arrays.
-enum DataArg {
+pub(crate) enum DataArg {
     Csv(PathBuf),
     Arrays(FreeMotionData),
 }
@@ -141,7 +141,7 @@ fn checked_rows(obj: &Bound<'_, PyAny>, name: &str, rows_n: usize, n: usize) -> 
     Ok(v)
 }
 
-fn data_arg(
+pub(crate) fn data_arg(
     obj: &Bound<'_, PyAny>,
     arg: &str,
     n: usize,
@@ -160,7 +160,7 @@ fn data_arg(
 
 /// Reads the data (CSV files here, without the GIL), checks its joints, and forms the rows
 /// `[q, qdot, qddot]` and targets (`tau`, or `tau - RNEA_nominal` for a hybrid residual).
-fn training_arrays(
+pub(crate) fn training_arrays(
     data: DataArg,
     arg: &str,
     n: usize,

@@ -1,0 +1,176 @@
+//! Identification from Python: `identify`, the `Identification` it returns
+//! (`predict`, `model`, `save`), `load_identification` and `excitation` (issue 22's contract;
+//! docs/python.md, "Identification").
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use admittance_dynamics::{identify as rust_identify, Data, Identification, IdentificationSettings, Model, Samples};
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{rows, value_error, vector_out};
+use crate::model::PyModel;
+use crate::network::{data_arg, training_arrays};
+
+/// An identified arm (`identify`, `load_identification`): the rigid-body `model` with its
+/// identified inertias, and per-joint rotor inertia, friction, offset and springs.
+/// `predict(q, qdot, qddot)` is the torque it needs; `summary` what it is expected to get
+/// wrong on motion it was not trained on.
+#[pyclass(frozen, module = "admittance._admittance", name = "Identification")]
+pub struct PyIdentification {
+    pub(crate) identification: Arc<Identification>,
+    /// The URDF model it was identified from (what files record).
+    pub(crate) urdf: Arc<Model>,
+}
+
+/// Splits conditioned rows `[q, qdot, qddot]` into the four arrays of `Samples`.
+struct Columns {
+    q: Vec<f64>,
+    qdot: Vec<f64>,
+    qddot: Vec<f64>,
+    tau: Vec<f64>,
+    n: usize,
+}
+
+impl Columns {
+    fn new(x: &[f64], tau: Vec<f64>, n: usize) -> Self {
+        let (mut q, mut qdot, mut qddot) = (Vec::new(), Vec::new(), Vec::new());
+        for row in x.chunks_exact(3 * n) {
+            q.extend_from_slice(&row[..n]);
+            qdot.extend_from_slice(&row[n..2 * n]);
+            qddot.extend_from_slice(&row[2 * n..]);
+        }
+        Columns { q, qdot, qddot, tau, n }
+    }
+    fn samples(&self) -> Samples<'_> {
+        Samples { q: &self.q, qdot: &self.qdot, qddot: &self.qddot, tau: &self.tau, dof: self.n }
+    }
+}
+
+fn columns(py: Python<'_>, data: &Bound<'_, PyAny>, arg: &str, model: &Model, input_filter_hz: f64) -> PyResult<Columns> {
+    let n = model.nq();
+    let joints: Vec<String> = model.joint_names().map(String::from).collect();
+    let data = data_arg(data, arg, n, Some(&joints))?;
+    let (x, y, _) = py.detach(|| training_arrays(data, arg, n, Some(&joints), input_filter_hz, None))?;
+    Ok(Columns::new(&x, y, n))
+}
+
+/// Identifies the arm `m` from free-motion `data` (a CSV path or a dict of arrays, as for
+/// `train`): inertial parameters regularised toward the URDF and kept physically possible,
+/// and with `friction` each joint's rotor inertia, friction, offset and springs. Settings are
+/// chosen on `validation` (another recording) when given, else by blocked cross-validation
+/// over contiguous stretches of `data`; `input_filter_hz` conditions q and tau as the
+/// observers do at run time (0: the columns as recorded).
+#[pyfunction]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=0.0, springs=true))]
+pub fn identify(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    m: &Bound<'_, PyModel>,
+    friction: bool,
+    validation: Option<&Bound<'_, PyAny>>,
+    input_filter_hz: f64,
+    springs: bool,
+) -> PyResult<PyIdentification> {
+    let urdf = m.get().model.clone();
+    let train = columns(py, data, "data", &urdf, input_filter_hz)?;
+    let validation = match validation.filter(|v| !v.is_none()) {
+        Some(v) => Some(columns(py, v, "validation", &urdf, input_filter_hz)?),
+        None => None,
+    };
+    let settings = IdentificationSettings { friction, springs: friction && springs, ..Default::default() };
+    let ident = py
+        .detach(|| rust_identify(&urdf, &train.samples(), validation.as_ref().map(|v| v.samples()).as_ref(), &settings))
+        .map_err(|e| value_error(e.to_string()))?;
+    Ok(PyIdentification { identification: Arc::new(ident), urdf })
+}
+
+/// Reads an identification file (`Identification.save`, `admittance identify`) with the URDF
+/// it names; with `m`, applies it to that model instead (which must be the arm it was made for).
+#[pyfunction]
+#[pyo3(signature = (path, m=None))]
+pub fn load_identification(path: PathBuf, m: Option<&Bound<'_, PyModel>>) -> PyResult<PyIdentification> {
+    let (ident, urdf) = match m {
+        Some(m) => {
+            let urdf = m.get().model.clone();
+            (Identification::load(&path, &urdf).map_err(|e| value_error(e.to_string()))?, urdf)
+        }
+        None => {
+            let (i, model) = Identification::load_with_urdf(&path).map_err(|e| value_error(e.to_string()))?;
+            (i, Arc::new(model))
+        }
+    };
+    Ok(PyIdentification { identification: Arc::new(ident), urdf })
+}
+
+#[pymethods]
+impl PyIdentification {
+    /// The torque (N m) the identified arm needs: `(n,)` for one state, `(N, n)` for rows.
+    fn predict<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>, qdot: &Bound<'py, PyAny>, qddot: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.identification.model.nq();
+        let (q, rq, single) = rows(q, "q", n, true)?;
+        let (qd, rqd, _) = rows(qdot, "qdot", n, true)?;
+        let (qdd, rqdd, _) = rows(qddot, "qddot", n, true)?;
+        if rq != rqd || rq != rqdd {
+            return Err(value_error(format!("`q`, `qdot` and `qddot` have {rq}, {rqd} and {rqdd} rows")));
+        }
+        let mut data = Data::new(&self.identification.model);
+        let mut out = vec![0.0; rq * n];
+        for k in 0..rq {
+            let r = k * n..(k + 1) * n;
+            self.identification
+                .predict(&mut data, &q[r.clone()], &qd[r.clone()], &qdd[r.clone()], &mut out[r])
+                .map_err(|e| value_error(e.to_string()))?;
+        }
+        if single {
+            return Ok(vector_out(py, &out, None, "out")?.into_any());
+        }
+        let a = numpy::ndarray::Array2::from_shape_vec((rq, n), out).map_err(|e| value_error(e.to_string()))?;
+        Ok(PyArray2::from_owned_array(py, a).into_any())
+    }
+
+    /// The identified rigid-body model (the URDF's kinematics, identified inertias).
+    #[getter]
+    fn model(&self) -> PyModel {
+        PyModel::new(self.identification.model.clone())
+    }
+
+    /// Per-joint terms: a list of dicts (armature, viscous, coulomb, coulomb_width,
+    /// offset, spring).
+    #[getter]
+    fn joint_terms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &serde_json::to_value(&self.identification.joint_terms).map_err(|e| value_error(e.to_string()))?)
+    }
+
+    /// What was chosen and measured (held-out rms per joint in N m, ridge, springs, ...).
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &serde_json::to_value(&self.identification.summary).map_err(|e| value_error(e.to_string()))?)
+    }
+
+    /// Writes the identification file (JSON, versioned, checksummed, atomic); an existing
+    /// file that is not an identification file is never overwritten.
+    #[pyo3(signature = (path, data=None))]
+    fn save(&self, path: PathBuf, data: Option<String>) -> PyResult<()> {
+        let mut provenance = BTreeMap::new();
+        provenance.insert("data".to_string(), serde_json::Value::from(data.unwrap_or_else(|| "from Python".into())));
+        self.identification.save(&path, &self.urdf, provenance).map_err(|e| value_error(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.identification.summary;
+        let total = (s.expected_false_torque_rms.iter().map(|x| x * x).sum::<f64>() / s.expected_false_torque_rms.len().max(1) as f64).sqrt();
+        format!("Identification({} joints, expected false torque {:.3} N m rms, held out: {})", self.identification.model.nq(), total, s.held_out)
+    }
+}
+
+/// A JSON value as Python objects (through the json module: small, off the real-time path).
+fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (v.to_string(),))
+}
+
+#[allow(dead_code)]
+fn _unused(_: &Bound<'_, PyDict>) {}
