@@ -1,0 +1,137 @@
+//! What can go wrong while importing a bag: every error names the bag (or the profile or
+//! output file), and where it applies the topic, the field and the time.
+
+use std::path::PathBuf;
+
+/// The command that converts a sqlite3 bag to MCAP (the `rosbags` Python package, no ROS
+/// needed: `pip install rosbags`).
+pub const CONVERT_COMMAND: &str = "rosbags-convert --src BAG --dst OUT --dst-storage mcap";
+
+/// A failed import.
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    /// A file or folder could not be read.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        message: String,
+    },
+    /// A sqlite3 bag (`.db3`): only MCAP is read.
+    #[error("{path}: a sqlite3 bag (.db3); only MCAP bags are read: convert it with `{CONVERT_COMMAND}` (pip install rosbags), or record with `ros2 bag record -s mcap`")]
+    Sqlite {
+        /// The bag.
+        path: PathBuf,
+    },
+    /// Neither an MCAP file nor a folder holding one.
+    #[error("{path}: not a rosbag2 MCAP bag: {reason}")]
+    NotABag {
+        /// The path given.
+        path: PathBuf,
+        /// What is there instead.
+        reason: String,
+    },
+    /// The MCAP container is damaged (truncated, a chunk whose CRC or compression fails).
+    #[error("{path}: damaged MCAP data after {messages_read} messages (last log time {last_log_time}): {message}; {hint}")]
+    Damaged {
+        /// The `.mcap` file.
+        path: PathBuf,
+        /// Messages read before the damage.
+        messages_read: usize,
+        /// The log time (s since the epoch) of the last message read, or "none".
+        last_log_time: String,
+        /// The MCAP reader's error.
+        message: String,
+        /// What to do.
+        hint: String,
+    },
+    /// The profile is not valid.
+    #[error("profile {profile}: {message}")]
+    Profile {
+        /// The profile's name or file.
+        profile: String,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+    /// A topic the profile needs is not in the bag.
+    #[error("{bag}: topic `{topic}` (for {signal}) is not in the bag; its topics: {present}")]
+    MissingTopic {
+        /// The bag.
+        bag: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The signal that needs it (`q`, `qdot`, `tau`, `label`).
+        signal: String,
+        /// The topics of the bag, with their types.
+        present: String,
+    },
+    /// A topic has another message type than the profile expects.
+    #[error("{bag}: topic `{topic}` (field `{field}` for {signal}) has type `{found}`, the profile expects `{expected}`")]
+    WrongType {
+        /// The bag.
+        bag: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The field.
+        field: String,
+        /// The signal.
+        signal: String,
+        /// The type the profile names.
+        expected: String,
+        /// The type in the bag.
+        found: String,
+    },
+    /// A field or joint the profile names cannot be read from the messages of a topic.
+    #[error("{bag}: topic `{topic}` field `{field}` (for {signal}): {message}")]
+    Field {
+        /// The bag.
+        bag: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The field.
+        field: String,
+        /// The signal.
+        signal: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The stamps of a topic do not increase strictly.
+    #[error("{bag}: topic `{topic}`: message {index} has stamp {time:.9} s, not after the previous message's {previous:.9} s (stamps must increase strictly; was the clock reset or are two publishers on the topic?)")]
+    NonMonotonic {
+        /// The bag.
+        bag: PathBuf,
+        /// The topic.
+        topic: String,
+        /// 0-based index of the message on its topic.
+        index: usize,
+        /// Its stamp (s since the epoch).
+        time: f64,
+        /// The previous message's stamp.
+        previous: f64,
+    },
+    /// The data cannot give a table (too few samples, no common time span, a bad rate).
+    #[error("{bag}: {message}")]
+    Data {
+        /// The bag.
+        bag: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The output file may not be written there.
+    #[error("--out {path}: {reason}")]
+    Destination {
+        /// The output file.
+        path: PathBuf,
+        /// Why not.
+        reason: String,
+    },
+}
+
+impl BagError {
+    /// Whether the error is in the input (bag, profile) rather than the output: the CLI's
+    /// exit code 3 versus 2 (usage) or 1.
+    pub fn is_input(&self) -> bool {
+        !matches!(self, BagError::Destination { .. })
+    }
+}
