@@ -134,7 +134,7 @@ impl FlatSchema {
             if out.iter().all(Option::is_some) {
                 break;
             }
-            let slot = wanted.iter().position(|w| *w == field.name);
+            let slots: Vec<usize> = (0..wanted.len()).filter(|i| wanted[*i] == field.name).collect();
             let Some(kind) = field.kind else {
                 return Err(format!(
                     "field `{}` has type `{}`, which the flat decoder does not read (only primitives, strings and their arrays before the wanted fields)",
@@ -142,9 +142,9 @@ impl FlatSchema {
                 ));
             };
             let values = cursor.field(kind, &field.shape, &field.name)?;
-            if let Some(i) = slot {
-                match values {
-                    Some(v) => out[i] = Some(v),
+            for i in slots {
+                match &values {
+                    Some(v) => out[i] = Some(v.clone()),
                     None => return Err(format!("field `{}` is a string, not numbers", field.name)),
                 }
             }
@@ -271,8 +271,9 @@ mod tests {
     fn reads_wanted_fields_in_order() {
         let s = FlatSchema::parse(DEF).unwrap();
         assert!(s.has_field("q") && !s.has_field("MODE") && !s.has_field("x"));
-        let v = s.read(&payload(), &["f", "q", "mode", "sec", "seq"]).unwrap();
-        assert_eq!(v, vec![vec![1.5], vec![1.0, 2.0], vec![-2.0], vec![7.0], vec![-3.0, 4.0]]);
+        let v = s.read(&payload(), &["f", "q", "mode", "sec", "seq", "sec"]).unwrap();
+        let sec = vec![7.0];
+        assert_eq!(v, vec![vec![1.5], vec![1.0, 2.0], vec![-2.0], sec.clone(), vec![-3.0, 4.0], sec]);
     }
 
     #[test]

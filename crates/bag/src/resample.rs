@@ -111,9 +111,10 @@ pub fn backward_difference(x: &[f64], n: usize, dt: f64) -> Vec<f64> {
     out
 }
 
-/// The grid: every multiple of `period` from the latest first stamp to the earliest last
-/// stamp of the series.
+/// The grid: the first series' (`q`'s) first stamp plus multiples of `period`, inside the
+/// span common to all series (so at the `q` topic's own rate the grid is its stamps).
 pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagError> {
+    let anchor = series.first().map_or(0, |s| s.stamps[0]);
     let start = series.iter().map(|s| s.stamps[0]).max().unwrap_or(0);
     let end = series.iter().map(|s| *s.stamps.last().unwrap_or(&0)).min().unwrap_or(0);
     if end <= start {
@@ -132,14 +133,19 @@ pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagE
             ),
         });
     }
-    let rows = (end - start) / period + 1;
+    // The first grid point at or after `start`.
+    let first = anchor + (start - anchor + period - 1) / period * period;
+    if first > end {
+        return Ok(Vec::new());
+    }
+    let rows = (end - first) / period + 1;
     if rows > 100_000_000 {
         return Err(BagError::Data {
             bag: bag.to_path_buf(),
             message: format!("{rows} rows at this rate: choose a lower --rate"),
         });
     }
-    Ok((0..rows).map(|k| start + k * period).collect())
+    Ok((0..rows).map(|k| first + k * period).collect())
 }
 
 #[cfg(test)]
@@ -180,6 +186,9 @@ mod tests {
         let b = series(vec![30, 40], vec![0.0; 2]);
         let e = grid(Path::new("x"), &[a.clone(), b], 10).unwrap_err().to_string();
         assert!(e.contains("share no time span") && e.contains("`/t`"), "{e}");
-        assert_eq!(grid(Path::new("x"), &[a], 7).unwrap(), vec![0, 7, 14]);
+        assert_eq!(grid(Path::new("x"), &[a.clone()], 7).unwrap(), vec![0, 7, 14]);
+        // Anchored on the first series: a later start skips to its next grid point.
+        let c = series(vec![3, 13, 23], vec![0.0; 3]);
+        assert_eq!(grid(Path::new("x"), &[a, c], 10).unwrap(), vec![10, 20]);
     }
 }
