@@ -97,18 +97,18 @@ pub enum BagError {
         message: String,
     },
     /// The stamps of a topic do not increase strictly.
-    #[error("{bag}: topic `{topic}`: message {index} has stamp {time:.9} s, not after the previous message's {previous:.9} s (stamps must increase strictly; was the clock reset or are two publishers on the topic?)")]
+    #[error("{bag}: topic `{topic}`: sample {index} has stamp {} s, not after the previous sample's {} s (stamps must increase strictly; was the clock reset or are two publishers on the topic?)", fmt_ns(*time_ns), fmt_ns(*previous_ns))]
     NonMonotonic {
         /// The bag.
         bag: PathBuf,
         /// The topic.
         topic: String,
-        /// 0-based index of the message on its topic.
+        /// 0-based index of the sample among the topic's usable messages.
         index: usize,
-        /// Its stamp (s since the epoch).
-        time: f64,
-        /// The previous message's stamp.
-        previous: f64,
+        /// Its stamp (ns since the epoch).
+        time_ns: i64,
+        /// The previous sample's stamp.
+        previous_ns: i64,
     },
     /// The data cannot give a table (too few samples, no common time span, a bad rate).
     #[error("{bag}: {message}")]
@@ -126,6 +126,13 @@ pub enum BagError {
         /// Why not.
         reason: String,
     },
+}
+
+/// A stamp in ns as seconds with all nine decimals (exact, unlike an f64).
+pub fn fmt_ns(ns: i64) -> String {
+    let sign = if ns < 0 { "-" } else { "" };
+    let a = ns.unsigned_abs();
+    format!("{sign}{}.{:09}", a / 1_000_000_000, a % 1_000_000_000)
 }
 
 impl BagError {

@@ -457,8 +457,8 @@ impl Collector<'_> {
                 bag: self.bag.clone(),
                 topic: s.topic.clone(),
                 index: i + 1,
-                time: s.stamps[i + 1] as f64 * 1e-9,
-                previous: s.stamps[i] as f64 * 1e-9,
+                time_ns: s.stamps[i + 1],
+                previous_ns: s.stamps[i],
             });
         }
         Ok(())

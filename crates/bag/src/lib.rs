@@ -62,7 +62,7 @@ mod report;
 mod resample;
 mod source;
 
-pub use error::{BagError, CONVERT_COMMAND};
+pub use error::{fmt_ns, BagError, CONVERT_COMMAND};
 pub use import::{import, import_to_csv, ImportOptions, Imported};
 pub use output::{check_destination, csv_text, write_csv, STAMP_COLUMN};
 pub use profile::{Profile, SignalSource};
