@@ -118,6 +118,14 @@ pub enum BagError {
         /// What is wrong.
         message: String,
     },
+    /// Writing the output failed (disk full, permissions); the old file is untouched.
+    #[error("--out {path}: writing failed: {message}")]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// The I/O error.
+        message: String,
+    },
     /// The output file may not be written there.
     #[error("--out {path}: {reason}")]
     Destination {
@@ -136,9 +144,13 @@ pub fn fmt_ns(ns: i64) -> String {
 }
 
 impl BagError {
-    /// Whether the error is in the input (bag, profile) rather than the output: the CLI's
-    /// exit code 3 versus 2 (usage) or 1.
-    pub fn is_input(&self) -> bool {
-        !matches!(self, BagError::Destination { .. })
+    /// The `admittance` exit code: 2 for a refused `--out` (usage), 1 for
+    /// a failed write, 3 for the input (bag, profile).
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            BagError::Destination { .. } => 2,
+            BagError::Write { .. } => 1,
+            _ => 3,
+        }
     }
 }

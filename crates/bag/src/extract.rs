@@ -112,11 +112,14 @@ impl<'p> Collector<'p> {
 
     /// Takes one message of the bag.
     pub fn visit(&mut self, m: &RawMessage) -> Result<(), BagError> {
-        let count = self.topics.entry(m.topic.to_string()).or_insert_with(|| TopicCount {
-            topic: m.topic.to_string(),
-            type_name: m.type_name.to_string(),
-            messages: 0,
-        });
+        let count = self
+            .topics
+            .entry(m.topic.to_string())
+            .or_insert_with(|| TopicCount {
+                topic: m.topic.to_string(),
+                type_name: m.type_name.to_string(),
+                messages: 0,
+            });
         count.messages += 1;
         let wanted: Vec<usize> = (0..self.signals.len())
             .filter(|i| self.signals[*i].source.topic == m.topic)
@@ -237,7 +240,9 @@ impl Collector<'_> {
         if !self.flat.contains_key(m.topic) {
             let schema = match m.schema {
                 Some(("ros2msg", text)) => FlatSchema::parse(&String::from_utf8_lossy(text)),
-                Some((enc, _)) => Err(format!("the embedded schema is `{enc}`, only ros2msg definitions are read")),
+                Some((enc, _)) => Err(format!(
+                    "the embedded schema is `{enc}`, only ros2msg definitions are read"
+                )),
                 None => Err("the bag embeds no message definition for it".into()),
             }
             .map_err(field_err)?;
@@ -245,7 +250,9 @@ impl Collector<'_> {
                 let s = &self.signals[*i].source;
                 let names = std::iter::once(&s.field).chain(s.stamp.iter().flatten());
                 if let Some(missing) = names.clone().find(|n| !schema.has_field(n)) {
-                    return Err(field_err(format!("the message definition has no field `{missing}`")));
+                    return Err(field_err(format!(
+                        "the message definition has no field `{missing}`"
+                    )));
                 }
             }
             self.flat.insert(m.topic.to_string(), schema);
@@ -353,7 +360,9 @@ impl Collector<'_> {
 impl Collector<'_> {
     fn order(&mut self, s: SignalState, joints: &[String]) -> Result<Series, BagError> {
         let columns: Vec<String> = if s.source.type_name == WRENCH_STAMPED {
-            ["fx", "fy", "fz", "tx", "ty", "tz"].map(String::from).to_vec()
+            ["fx", "fy", "fz", "tx", "ty", "tz"]
+                .map(String::from)
+                .to_vec()
         } else {
             joints.to_vec()
         };
@@ -377,13 +386,21 @@ impl Collector<'_> {
                     stamps.push(sample.stamp_ns);
                     values.extend(r);
                 }
-                Ok(_) => self.skip(&topic, "non-finite value", sample.log_ns, format!("field `{}`", s.source.field)),
+                Ok(_) => self.skip(
+                    &topic,
+                    "non-finite value",
+                    sample.log_ns,
+                    format!("field `{}`", s.source.field),
+                ),
                 Err((reason, detail)) => self.skip(&topic, reason, sample.log_ns, detail),
             }
         }
         if stamps.is_empty() {
             let why = self.skip_summary(&topic);
-            return Err(self.field_error(&s, format!("none of its {received} decoded messages is usable ({why})")));
+            return Err(self.field_error(
+                &s,
+                format!("none of its {received} decoded messages is usable ({why})"),
+            ));
         }
         Ok(Series {
             role: s.role,
@@ -409,7 +426,14 @@ impl Collector<'_> {
             return Err(if sample.values.is_empty() {
                 ("empty field", format!("`{field}` is empty"))
             } else {
-                ("wrong number of values", format!("{} `{field}` values for {} names", sample.values.len(), names.len()))
+                (
+                    "wrong number of values",
+                    format!(
+                        "{} `{field}` values for {} names",
+                        sample.values.len(),
+                        names.len()
+                    ),
+                )
             });
         }
         if !cache.as_ref().is_some_and(|(n, _)| Rc::ptr_eq(n, names)) {
@@ -417,7 +441,12 @@ impl Collector<'_> {
             for j in joints {
                 match names.iter().position(|n| n == j) {
                     Some(i) => idx.push(i),
-                    None => return Err(("joint missing", format!("no joint `{j}` among [{}]", names.join(", ")))),
+                    None => {
+                        return Err((
+                            "joint missing",
+                            format!("no joint `{j}` among [{}]", names.join(", ")),
+                        ))
+                    }
                 }
             }
             *cache = Some((names.clone(), idx));
@@ -433,14 +462,26 @@ impl Collector<'_> {
             .filter(|k| k.topic == topic)
             .map(|k| format!("{} skipped: {} (first: {})", k.count, k.reason, k.example))
             .collect();
-        if parts.is_empty() { "no message".into() } else { parts.join("; ") }
+        if parts.is_empty() {
+            "no message".into()
+        } else {
+            parts.join("; ")
+        }
     }
 
-    fn apply_torque_constant(&self, series: &mut [Series], k: &[f64], n: usize) -> Result<(), BagError> {
+    fn apply_torque_constant(
+        &self,
+        series: &mut [Series],
+        k: &[f64],
+        n: usize,
+    ) -> Result<(), BagError> {
         if k.len() != n {
             return Err(BagError::Profile {
                 profile: self.profile.name.clone(),
-                message: format!("[tau] torque_constant has {} values for the {n} joints", k.len()),
+                message: format!(
+                    "[tau] torque_constant has {} values for the {n} joints",
+                    k.len()
+                ),
             });
         }
         for s in series.iter_mut().filter(|s| s.role == "tau") {

@@ -134,7 +134,9 @@ impl FlatSchema {
             if out.iter().all(Option::is_some) {
                 break;
             }
-            let slots: Vec<usize> = (0..wanted.len()).filter(|i| wanted[*i] == field.name).collect();
+            let slots: Vec<usize> = (0..wanted.len())
+                .filter(|i| wanted[*i] == field.name)
+                .collect();
             let Some(kind) = field.kind else {
                 return Err(format!(
                     "field `{}` has type `{}`, which the flat decoder does not read (only primitives, strings and their arrays before the wanted fields)",
@@ -184,7 +186,10 @@ impl Cursor<'_> {
 
     fn u32(&mut self, what: &str) -> Result<usize, String> {
         self.align(4, what)?;
-        let b: [u8; 4] = self.take(4, what)?.try_into().map_err(|_| what.to_string())?;
+        let b: [u8; 4] = self
+            .take(4, what)?
+            .try_into()
+            .map_err(|_| what.to_string())?;
         Ok(if self.little {
             u32::from_le_bytes(b)
         } else {
@@ -232,7 +237,9 @@ impl Cursor<'_> {
             Kind::Number(size, nk) => {
                 // The count comes from the payload: bound it by the bytes left first.
                 if count.saturating_mul(size) > self.body.len().saturating_sub(self.pos) {
-                    return Err(format!("field `{what}` claims {count} elements, more than the payload holds"));
+                    return Err(format!(
+                        "field `{what}` claims {count} elements, more than the payload holds"
+                    ));
                 }
                 (0..count)
                     .map(|_| self.number(size, nk, what))
@@ -271,9 +278,21 @@ mod tests {
     fn reads_wanted_fields_in_order() {
         let s = FlatSchema::parse(DEF).unwrap();
         assert!(s.has_field("q") && !s.has_field("MODE") && !s.has_field("x"));
-        let v = s.read(&payload(), &["f", "q", "mode", "sec", "seq", "sec"]).unwrap();
+        let v = s
+            .read(&payload(), &["f", "q", "mode", "sec", "seq", "sec"])
+            .unwrap();
         let sec = vec![7.0];
-        assert_eq!(v, vec![vec![1.5], vec![1.0, 2.0], vec![-2.0], sec.clone(), vec![-3.0, 4.0], sec]);
+        assert_eq!(
+            v,
+            vec![
+                vec![1.5],
+                vec![1.0, 2.0],
+                vec![-2.0],
+                sec.clone(),
+                vec![-3.0, 4.0],
+                sec
+            ]
+        );
     }
 
     #[test]

@@ -29,7 +29,11 @@ pub struct Imported {
 }
 
 /// Reads a bag with a profile into the free-motion table.
-pub fn import(bag: &Path, profile: &Profile, options: &ImportOptions) -> Result<Imported, BagError> {
+pub fn import(
+    bag: &Path,
+    profile: &Profile,
+    options: &ImportOptions,
+) -> Result<Imported, BagError> {
     let files = crate::source::locate(bag)?;
     let mut collector = Collector::new(bag, profile);
     let mut damage = Vec::new();
@@ -74,9 +78,16 @@ fn signal_report(s: &Series) -> SignalReport {
     }
 }
 
-fn tabulate(bag: &Path, ex: Extracted, rate_hz: Option<f64>) -> Result<(Table, ImportReport), BagError> {
+fn tabulate(
+    bag: &Path,
+    ex: Extracted,
+    rate_hz: Option<f64>,
+) -> Result<(Table, ImportReport), BagError> {
     let (Some(q), Some(tau)) = (find(&ex.series, "q"), find(&ex.series, "tau")) else {
-        return Err(BagError::Data { bag: bag.to_path_buf(), message: "the profile gives no q or tau".into() });
+        return Err(BagError::Data {
+            bag: bag.to_path_buf(),
+            message: "the profile gives no q or tau".into(),
+        });
     };
     let qdot = find(&ex.series, "qdot");
     let label = find(&ex.series, "label");
@@ -100,7 +111,10 @@ fn tabulate(bag: &Path, ex: Extracted, rate_hz: Option<f64>) -> Result<(Table, I
     let (qdot_v, derivatives) = match qdot {
         Some(s) => (
             resample::interpolate(s, &grid),
-            format!("qdot from `{}`; qddot = backward difference of qdot", s.topic),
+            format!(
+                "qdot from `{}`; qddot = backward difference of qdot",
+                s.topic
+            ),
         ),
         None => (
             resample::backward_difference(&q_v, n, dt),
@@ -119,7 +133,12 @@ fn tabulate(bag: &Path, ex: Extracted, rate_hz: Option<f64>) -> Result<(Table, I
         qdot: cut(qdot_v, n),
         qddot: cut(qddot_v, n),
         tau: cut(tau_v, n),
-        label: label.map(|s| (s.columns.clone(), cut(resample::interpolate(s, &grid), s.columns.len()))),
+        label: label.map(|s| {
+            (
+                s.columns.clone(),
+                cut(resample::interpolate(s, &grid), s.columns.len()),
+            )
+        }),
         stamps_ns: stamps,
     };
     let report = ImportReport {

@@ -181,10 +181,7 @@ mod tests {
     fn joint_state_round_trip_and_wrong_type() {
         let js = JointState {
             header: Header {
-                stamp: Time {
-                    sec: 5,
-                    nanosec: 7,
-                },
+                stamp: Time { sec: 5, nanosec: 7 },
                 frame_id: "base".into(),
             },
             name: vec!["a".into(), "bb".into()],

@@ -91,18 +91,27 @@ pub fn csv_text(table: &Table) -> String {
 /// to disk and renamed: `path` holds the old file or the new one, never a part.
 pub fn write_csv(path: &Path, table: &Table) -> Result<(), BagError> {
     check_destination(path)?;
-    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
     let text = csv_text(table);
     let result = (|| {
-        let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
         f.write_all(text.as_bytes())?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
-        return Err(refuse(path, format!("writing failed: {e}")));
+        return Err(BagError::Write {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        });
     }
     Ok(())
 }

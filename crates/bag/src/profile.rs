@@ -196,11 +196,9 @@ fn check_source(role: &str, s: &SignalSource, have_joints: bool) -> Result<(), S
             return Err(format!("[{role}] a WrenchStamped can only be the label"))
         }
         WRENCH_STAMPED if s.field != "wrench" => return bad_field("wrench"),
-        t if !t.contains("/msg/") => {
-            return Err(format!(
-                "[{role}] type `{t}`: give the full rosbag2 name, such as sensor_msgs/msg/JointState"
-            ))
-        }
+        t if !t.contains("/msg/") => return Err(format!(
+            "[{role}] type `{t}`: give the full rosbag2 name, such as sensor_msgs/msg/JointState"
+        )),
         _ => {
             if !have_joints && s.type_name != WRENCH_STAMPED {
                 return Err(format!(
@@ -211,7 +209,9 @@ fn check_source(role: &str, s: &SignalSource, have_joints: bool) -> Result<(), S
         }
     }
     if role != "tau" && (s.unit.is_some() || s.torque_constant.is_some()) {
-        return Err(format!("[{role}] `unit` and `torque_constant` belong in [tau]"));
+        return Err(format!(
+            "[{role}] `unit` and `torque_constant` belong in [tau]"
+        ));
     }
     Ok(())
 }
@@ -227,7 +227,10 @@ mod tests {
             assert_eq!(p.name, name);
         }
         let e = Profile::builtin("ur").unwrap().unwrap_err().to_string();
-        assert!(e.contains("torque_constant") && e.contains("/joint_states"), "{e}");
+        assert!(
+            e.contains("torque_constant") && e.contains("/joint_states"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -245,11 +248,16 @@ mod tests {
         let base = include_str!("../profiles/franka.toml");
         let typo = base.replace("field = \"position\"", "fiedl = \"position\"");
         let e = Profile::parse(&typo, "mine.toml").unwrap_err().to_string();
-        assert!(e.starts_with("profile mine.toml:") && e.contains("fiedl"), "{e}");
+        assert!(
+            e.starts_with("profile mine.toml:") && e.contains("fiedl"),
+            "{e}"
+        );
         let field = base.replace("field = \"position\"", "field = \"positions\"");
         let e = Profile::parse(&field, "mine.toml").unwrap_err().to_string();
         assert!(e.contains("[q] field `positions`"), "{e}");
-        let e = Profile::resolve("/no/such/profile.toml").unwrap_err().to_string();
+        let e = Profile::resolve("/no/such/profile.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("franka, ur, lbr"), "{e}");
     }
 }

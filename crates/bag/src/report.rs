@@ -128,7 +128,11 @@ impl fmt::Display for ImportReport {
         writeln!(f, "read: {}", self.files.join(", "))?;
         writeln!(f, "topics:")?;
         for t in &self.topics {
-            writeln!(f, "  {} ({}): {} messages", t.topic, t.type_name, t.messages)?;
+            writeln!(
+                f,
+                "  {} ({}): {} messages",
+                t.topic, t.type_name, t.messages
+            )?;
         }
         writeln!(f, "signals:")?;
         for s in &self.signals {
@@ -158,7 +162,11 @@ impl fmt::Display for ImportReport {
             writeln!(f, "gap: {topic}: no message for {len:.3} s from t = {start:.3} s (interpolated across)")?;
         }
         writeln!(f, "joints: {}", self.joints.join(", "))?;
-        let how = if self.rate_is_median { "the median rate of the q topic" } else { "--rate" };
+        let how = if self.rate_is_median {
+            "the median rate of the q topic"
+        } else {
+            "--rate"
+        };
         writeln!(f, "rate: {:.6} Hz ({how})", self.rate_hz)?;
         writeln!(f, "derivatives: {}", self.derivatives)?;
         write!(

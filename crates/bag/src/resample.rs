@@ -69,12 +69,16 @@ pub fn period_ns(bag: &Path, q: &Series, rate_hz: Option<f64>) -> Result<i64, Ba
         message,
     };
     match rate_hz {
-        Some(r) if !(r.is_finite() && r > 0.0 && r <= 1e9) => {
-            Err(data(format!("rate {r} Hz: give a positive rate up to 1e9 Hz")))
-        }
+        Some(r) if !(r.is_finite() && r > 0.0 && r <= 1e9) => Err(data(format!(
+            "rate {r} Hz: give a positive rate up to 1e9 Hz"
+        ))),
         Some(r) => Ok((1e9 / r).round() as i64),
         None => median_period_ns(&q.stamps).ok_or_else(|| {
-            data(format!("topic `{}` has {} usable message(s): too few for a rate", q.topic, q.stamps.len()))
+            data(format!(
+                "topic `{}` has {} usable message(s): too few for a rate",
+                q.topic,
+                q.stamps.len()
+            ))
         }),
     }
 }
@@ -116,13 +120,23 @@ pub fn backward_difference(x: &[f64], n: usize, dt: f64) -> Vec<f64> {
 pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagError> {
     let anchor = series.first().map_or(0, |s| s.stamps[0]);
     let start = series.iter().map(|s| s.stamps[0]).max().unwrap_or(0);
-    let end = series.iter().map(|s| *s.stamps.last().unwrap_or(&0)).min().unwrap_or(0);
+    let end = series
+        .iter()
+        .map(|s| *s.stamps.last().unwrap_or(&0))
+        .min()
+        .unwrap_or(0);
     if end <= start {
         let spans: Vec<String> = series
             .iter()
             .map(|s| {
                 let last = s.stamps.last().copied().unwrap_or(0);
-                format!("{} `{}` covers {:.6} to {:.6} s", s.role, s.topic, s.stamps[0] as f64 * 1e-9, last as f64 * 1e-9)
+                format!(
+                    "{} `{}` covers {:.6} to {:.6} s",
+                    s.role,
+                    s.topic,
+                    s.stamps[0] as f64 * 1e-9,
+                    last as f64 * 1e-9
+                )
             })
             .collect();
         return Err(BagError::Data {
@@ -167,7 +181,10 @@ mod tests {
     #[test]
     fn interpolation_is_exact_on_samples_and_linear_between() {
         let s = series(vec![0, 10, 20], vec![1.0, 3.0, 7.0]);
-        assert_eq!(interpolate(&s, &[0, 5, 10, 15, 20]), vec![1.0, 2.0, 3.0, 5.0, 7.0]);
+        assert_eq!(
+            interpolate(&s, &[0, 5, 10, 15, 20]),
+            vec![1.0, 2.0, 3.0, 5.0, 7.0]
+        );
     }
 
     #[test]
@@ -184,9 +201,17 @@ mod tests {
     fn grid_needs_a_common_span() {
         let a = series(vec![0, 10, 20], vec![0.0; 3]);
         let b = series(vec![30, 40], vec![0.0; 2]);
-        let e = grid(Path::new("x"), &[a.clone(), b], 10).unwrap_err().to_string();
-        assert!(e.contains("share no time span") && e.contains("`/t`"), "{e}");
-        assert_eq!(grid(Path::new("x"), &[a.clone()], 7).unwrap(), vec![0, 7, 14]);
+        let e = grid(Path::new("x"), &[a.clone(), b], 10)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("share no time span") && e.contains("`/t`"),
+            "{e}"
+        );
+        assert_eq!(
+            grid(Path::new("x"), std::slice::from_ref(&a), 7).unwrap(),
+            vec![0, 7, 14]
+        );
         // Anchored on the first series: a later start skips to its next grid point.
         let c = series(vec![3, 13, 23], vec![0.0; 3]);
         assert_eq!(grid(Path::new("x"), &[a, c], 10).unwrap(), vec![10, 20]);

@@ -75,7 +75,10 @@ fn locate_in_folder(dir: &Path) -> Result<Vec<PathBuf>, BagError> {
         names.sort();
         return Err(BagError::NotABag {
             path: dir.to_path_buf(),
-            reason: format!("no .mcap file in the folder (it holds: {})", names.join(", ")),
+            reason: format!(
+                "no .mcap file in the folder (it holds: {})",
+                names.join(", ")
+            ),
         });
     }
     mcap.sort();
@@ -132,12 +135,14 @@ pub fn stream(
     let bytes = std::fs::read(file).map_err(|e| io(file, e))?;
     let mut outcome = StreamOutcome::default();
     let mut last_log = None;
-    let damaged = |message: String, read: usize, last: Option<u64>| BagError::Damaged {
+    let damaged = |message: String, read: usize, last: Option<u64>| {
+        BagError::Damaged {
         path: file.to_path_buf(),
         messages_read: read,
         last_log_time: fmt_time(last),
         message,
         hint: "a recorder that was killed leaves a truncated file: pass --accept-damaged to import the messages before the damage (the loss is reported)".into(),
+    }
     };
     let mut messages = match mcap::MessageStream::new(&bytes) {
         Ok(s) => s,

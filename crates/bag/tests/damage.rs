@@ -22,7 +22,11 @@ fn franka() -> Profile {
 }
 
 /// A bag of `n` JointStates on `/js` at 1 kHz (3 joints), log time = stamp + 0.2 ms.
-fn js_bag(dir: &Path, n: usize, edit: impl Fn(usize, &mut msgs::JointState, &mut Vec<u8>)) -> std::path::PathBuf {
+fn js_bag(
+    dir: &Path,
+    n: usize,
+    edit: impl Fn(usize, &mut msgs::JointState, &mut Vec<u8>),
+) -> std::path::PathBuf {
     let path = dir.join("js.mcap");
     let messages: Vec<Out> = (0..n)
         .map(|k| {
@@ -50,11 +54,18 @@ fn truncated_bag_is_an_error_or_with_accept_damage_a_reported_loss() {
     let e = import(&cut, &franka(), &options(false)).unwrap_err();
     assert!(matches!(e, BagError::Damaged { .. }), "{e}");
     let text = e.to_string();
-    assert!(text.contains("cut.mcap") && text.contains("--accept-damaged"), "{text}");
+    assert!(
+        text.contains("cut.mcap") && text.contains("--accept-damaged"),
+        "{text}"
+    );
     let im = import(&cut, &franka(), &options(true)).unwrap();
     assert_eq!(im.report.damage.len(), 1, "{:?}", im.report.damage);
     assert!(im.report.to_string().contains("DAMAGED (accepted)"));
-    assert!(im.table.len() > 10 && im.table.len() < 99, "{}", im.table.len());
+    assert!(
+        im.table.len() > 10 && im.table.len() < 99,
+        "{}",
+        im.table.len()
+    );
 }
 
 #[test]
@@ -63,7 +74,11 @@ fn every_truncation_and_flipped_byte_gives_a_result_not_a_panic() {
     let path = dir.path().join("x.mcap");
     for name in ["franka_plain.mcap", "lbr_zstd/lbr_zstd.mcap"] {
         let bytes = std::fs::read(data(name)).unwrap();
-        let profile = if name.starts_with("lbr") { Profile::builtin("lbr").unwrap().unwrap() } else { franka() };
+        let profile = if name.starts_with("lbr") {
+            Profile::builtin("lbr").unwrap().unwrap()
+        } else {
+            franka()
+        };
         let step = bytes.len() / 60;
         for k in 0..60 {
             let at = k * step + k % 7;
@@ -89,11 +104,19 @@ fn damaged_zstd_chunk_names_the_file() {
     // flipped bytes inside compressed data may decode to other numbers (which the stamp
     // check or the decoding often catches); a damaged frame header fails decompression.
     let mut bytes = std::fs::read(data("lbr_zstd/lbr_zstd.mcap")).unwrap();
-    let frame = bytes.windows(4).position(|w| w == [0x28, 0xb5, 0x2f, 0xfd]).unwrap();
+    let frame = bytes
+        .windows(4)
+        .position(|w| w == [0x28, 0xb5, 0x2f, 0xfd])
+        .unwrap();
     bytes[frame + 1] ^= 0xff;
     let path = dir.path().join("lbr.mcap");
     std::fs::write(&path, &bytes).unwrap();
-    let e = import(&path, &Profile::builtin("lbr").unwrap().unwrap(), &options(false)).unwrap_err();
+    let e = import(
+        &path,
+        &Profile::builtin("lbr").unwrap().unwrap(),
+        &options(false),
+    )
+    .unwrap_err();
     assert!(matches!(e, BagError::Damaged { .. }), "{e}");
     assert!(e.to_string().contains("lbr.mcap"), "{e}");
 }
@@ -103,20 +126,36 @@ fn wrong_type_names_topic_field_and_both_types() {
     let text = include_str!("../profiles/franka.toml")
         .replace("external_joint_torques", "external_wrench_in_base_frame");
     let profile = Profile::parse(&text, "wrong.toml").unwrap();
-    let e = import(&data("franka_zstd"), &profile, &options(false)).unwrap_err().to_string();
-    for part in ["franka_zstd", "/franka_robot_state_broadcaster/external_wrench_in_base_frame", "`effort`", "label", "geometry_msgs/msg/WrenchStamped", "sensor_msgs/msg/JointState"] {
+    let e = import(&data("franka_zstd"), &profile, &options(false))
+        .unwrap_err()
+        .to_string();
+    for part in [
+        "franka_zstd",
+        "/franka_robot_state_broadcaster/external_wrench_in_base_frame",
+        "`effort`",
+        "label",
+        "geometry_msgs/msg/WrenchStamped",
+        "sensor_msgs/msg/JointState",
+    ] {
         assert!(e.contains(part), "{part} not in {e}");
     }
 }
 
 #[test]
 fn missing_topic_lists_the_bag_topics() {
-    let text = include_str!("../profiles/franka.toml").replace("/franka_robot_state_broadcaster/measured_joint_states", "/joint_states");
+    let text = include_str!("../profiles/franka.toml").replace(
+        "/franka_robot_state_broadcaster/measured_joint_states",
+        "/joint_states",
+    );
     let profile = Profile::parse(&text, "missing.toml").unwrap();
     let e = import(&data("franka_zstd"), &profile, &options(false)).unwrap_err();
     assert!(matches!(e, BagError::MissingTopic { .. }), "{e}");
     let e = e.to_string();
-    assert!(e.contains("`/joint_states` (for q)") && e.contains("external_joint_torques (sensor_msgs/msg/JointState)"), "{e}");
+    assert!(
+        e.contains("`/joint_states` (for q)")
+            && e.contains("external_joint_torques (sensor_msgs/msg/JointState)"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -128,10 +167,19 @@ fn non_monotonic_stamps_are_an_error_with_the_times() {
         }
     });
     let e = import(&bag, &js_profile(true), &options(false)).unwrap_err();
-    assert!(matches!(e, BagError::NonMonotonic { index: 7, time_ns, previous_ns, .. }
-        if time_ns == T0_NS + 4 * MS && previous_ns == T0_NS + 6 * MS), "{e}");
+    assert!(
+        matches!(e, BagError::NonMonotonic { index: 7, time_ns, previous_ns, .. }
+        if time_ns == T0_NS + 4 * MS && previous_ns == T0_NS + 6 * MS),
+        "{e}"
+    );
     let e = e.to_string();
-    assert!(e.contains("js.mcap") && e.contains("`/js`") && e.contains("1700000000.004000000") && e.contains("1700000000.006000000"), "{e}");
+    assert!(
+        e.contains("js.mcap")
+            && e.contains("`/js`")
+            && e.contains("1700000000.004000000")
+            && e.contains("1700000000.006000000"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -145,21 +193,32 @@ fn zero_stamps_fall_back_to_the_log_time_and_say_so() {
     let im = import(&bag, &js_profile(true), &options(false)).unwrap();
     let q = &im.report.signals[0];
     assert_eq!((q.time.stamped, q.time.log_time), (10, 10));
-    assert!(im.report.to_string().contains("10 of 20 messages had a zero stamp"), "{}", im.report);
+    assert!(
+        im.report
+            .to_string()
+            .contains("10 of 20 messages had a zero stamp"),
+        "{}",
+        im.report
+    );
 }
 
 #[test]
 fn unusable_messages_are_skipped_and_counted_by_reason() {
     let dir = tempfile::tempdir().unwrap();
     let bag = js_bag(dir.path(), 30, |k, js, raw| match k {
-        3 => *raw = vec![0, 1, 0, 0, 9, 9],          // undecodable
-        5 => js.name[1] = "other".into(),            // joint j1 missing
-        8 => js.effort[2] = f64::NAN,                // non-finite
+        3 => *raw = vec![0, 1, 0, 0, 9, 9],           // undecodable
+        5 => js.name[1] = "other".into(),             // joint j1 missing
+        8 => js.effort[2] = f64::NAN,                 // non-finite
         11 => js.position.pop().map(|_| ()).unwrap(), // 2 positions for 3 names
         _ => {}
     });
     let im = import(&bag, &js_profile(true), &options(false)).unwrap();
-    let reasons: Vec<(String, usize)> = im.report.skips.iter().map(|s| (s.reason.clone(), s.count)).collect();
+    let reasons: Vec<(String, usize)> = im
+        .report
+        .skips
+        .iter()
+        .map(|s| (s.reason.clone(), s.count))
+        .collect();
     // Message 5 lacks j1 for every signal of the topic, 11 only for q: counted per signal.
     assert_eq!(
         reasons,
@@ -180,8 +239,13 @@ fn unusable_messages_are_skipped_and_counted_by_reason() {
 fn a_field_empty_in_every_message_is_an_error_naming_it() {
     let dir = tempfile::tempdir().unwrap();
     let bag = js_bag(dir.path(), 10, |_, js, _| js.velocity.clear());
-    let e = import(&bag, &js_profile(true), &options(false)).unwrap_err().to_string();
-    assert!(e.contains("`/js` field `velocity` (for qdot)") && e.contains("10 skipped: empty field"), "{e}");
+    let e = import(&bag, &js_profile(true), &options(false))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("`/js` field `velocity` (for qdot)") && e.contains("10 skipped: empty field"),
+        "{e}"
+    );
     // Without [qdot] the velocity is the backward difference of q.
     let im = import(&bag, &js_profile(false), &options(false)).unwrap();
     assert_eq!(im.report.dropped_leading_rows, 2);
@@ -192,10 +256,17 @@ fn not_a_bag_and_empty_folders_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let text = dir.path().join("notes.txt");
     std::fs::write(&text, "hello").unwrap();
-    let e = import(&text, &franka(), &options(false)).unwrap_err().to_string();
+    let e = import(&text, &franka(), &options(false))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("notes.txt") && e.contains("MCAP magic"), "{e}");
-    let e = import(dir.path(), &franka(), &options(false)).unwrap_err().to_string();
-    assert!(e.contains("no .mcap file") && e.contains("notes.txt"), "{e}");
+    let e = import(dir.path(), &franka(), &options(false))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no .mcap file") && e.contains("notes.txt"),
+        "{e}"
+    );
     let e = import(&dir.path().join("absent"), &franka(), &options(false)).unwrap_err();
     assert!(matches!(e, BagError::Io { .. }), "{e}");
 }
@@ -204,7 +275,9 @@ fn not_a_bag_and_empty_folders_are_named() {
 fn a_bad_rate_and_too_short_a_bag_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let bag = js_bag(dir.path(), 2, |_, _, _| {});
-    let e = import(&bag, &js_profile(false), &options(false)).unwrap_err().to_string();
+    let e = import(&bag, &js_profile(false), &options(false))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("too few for the derivatives"), "{e}");
     let o = ImportOptions {
         rate_hz: Some(-5.0),

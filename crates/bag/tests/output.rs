@@ -15,7 +15,9 @@ fn csv_has_the_free_motion_layout_and_exact_numbers() {
     let out = dir.path().join("free.csv");
     let options = ImportOptions::default();
     let report = import_to_csv(&data("franka_plain.mcap"), &franka(), &options, &out).unwrap();
-    let table = import(&data("franka_plain.mcap"), &franka(), &options).unwrap().table;
+    let table = import(&data("franka_plain.mcap"), &franka(), &options)
+        .unwrap()
+        .table;
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -27,7 +29,10 @@ fn csv_has_the_free_motion_layout_and_exact_numbers() {
     expected.push(STAMP_COLUMN.into());
     assert_eq!(header, expected);
     let lines: Vec<&str> = lines.collect();
-    let rows: Vec<Vec<f64>> = lines.iter().map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> = lines
+        .iter()
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
     assert_eq!(rows.len(), report.rows);
     assert_eq!(rows.len(), table.len());
     for (k, r) in rows.iter().enumerate() {
@@ -58,11 +63,18 @@ fn out_replaces_only_its_own_csv_and_leaves_no_temporary_file() {
     std::fs::write(&user, "t,q.a,qdot.a,qddot.a,tau.a\n0,1,2,3,4\n").unwrap();
     let e = import_to_csv(&bag, &franka(), &options, &user).unwrap_err();
     assert!(matches!(e, BagError::Destination { .. }), "{e}");
-    assert!(e.to_string().contains("user.csv") && e.to_string().contains("refusing to replace"), "{e}");
-    assert_eq!(std::fs::read_to_string(&user).unwrap(), "t,q.a,qdot.a,qddot.a,tau.a\n0,1,2,3,4\n");
+    assert!(
+        e.to_string().contains("user.csv") && e.to_string().contains("refusing to replace"),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&user).unwrap(),
+        "t,q.a,qdot.a,qddot.a,tau.a\n0,1,2,3,4\n"
+    );
     let e = import_to_csv(&bag, &franka(), &options, dir.path()).unwrap_err();
     assert!(e.to_string().contains("not a regular file"), "{e}");
-    let e = import_to_csv(&bag, &franka(), &options, &dir.path().join("no/such/x.csv")).unwrap_err();
+    let e =
+        import_to_csv(&bag, &franka(), &options, &dir.path().join("no/such/x.csv")).unwrap_err();
     assert!(e.to_string().contains("its folder"), "{e}");
     // A bad bag leaves the destination as it was.
     let e = import_to_csv(&data("franka_sqlite"), &franka(), &options, &out).unwrap_err();

@@ -47,7 +47,10 @@ fn franka_zstd_folder_at_its_own_rate_is_the_recorded_samples() {
     let t = &im.table;
     assert_eq!(im.report.rate_hz, 1000.0);
     assert!(im.report.rate_is_median);
-    assert_eq!(t.joints, (1..=7).map(|i| format!("fr3_joint{i}")).collect::<Vec<_>>());
+    assert_eq!(
+        t.joints,
+        (1..=7).map(|i| format!("fr3_joint{i}")).collect::<Vec<_>>()
+    );
     // Labels at 250 Hz from 0.5 ms to 996.5 ms: the grid is the q stamps from 1 ms
     // (anchored on q) to 996 ms, minus the first row (no qddot yet).
     assert_eq!(t.stamps_ns[0], T0_NS + 2_000_000);
@@ -73,7 +76,10 @@ fn franka_zstd_folder_at_its_own_rate_is_the_recorded_samples() {
     // The 250 Hz label, interpolated: h^2/8 max|f''| = 16e-6/8 * 1.4 (2 pi)^2 = 1.1e-4.
     let (cols, v) = t.label.as_ref().unwrap();
     assert_eq!(cols.len(), 7);
-    let truth_label = t.stamps_ns.iter().flat_map(|s| (0..7).map(move |i| label(i, secs(*s))));
+    let truth_label = t
+        .stamps_ns
+        .iter()
+        .flat_map(|s| (0..7).map(move |i| label(i, secs(*s))));
     let e_label = max_err(v.iter().copied(), truth_label);
     assert!(e_label < 1.2e-4, "{e_label}");
     // Every message read, none skipped, header stamps used.
@@ -92,7 +98,10 @@ fn franka_resampled_at_300_hz_within_the_interpolation_bound() {
     // h = 1 ms: q <= 1.25e-7 * 0.6 (2 pi 1.1)^2 = 3.6e-6; qdot <= 1.25e-7 * 330 = 4.1e-5;
     // tau (5 sin q + ...) <= 1.25e-7 * max|tau''| < 1.25e-7 * 2e3 = 2.5e-4.
     let (eq, eqd, etau) = state_errors(&im);
-    assert!(eq < 3.6e-6 && eqd < 4.1e-5 && etau < 2.5e-4, "{eq} {eqd} {etau}");
+    assert!(
+        eq < 3.6e-6 && eqd < 4.1e-5 && etau < 2.5e-4,
+        "{eq} {eqd} {etau}"
+    );
     println!("franka 300 Hz: q {eq:e} qdot {eqd:e} tau {etau:e}");
 }
 
@@ -107,7 +116,10 @@ fn franka_plain_single_file() {
 #[test]
 fn ur_needs_torque_constants_and_maps_joints_by_name() {
     let e = Profile::builtin("ur").unwrap().unwrap_err().to_string();
-    assert!(e.contains("torque_constant") && e.contains("motor current"), "{e}");
+    assert!(
+        e.contains("torque_constant") && e.contains("motor current"),
+        "{e}"
+    );
     let text = include_str!("../profiles/ur.toml").replace(
         "unit = \"A\"",
         "unit = \"A\"\ntorque_constant = [10.0, 10.0, 10.0, 5.0, 5.0, 5.0]",
@@ -129,7 +141,11 @@ fn lbr_state_custom_type_with_its_own_stamp() {
     let im = run("lbr_zstd", &builtin("lbr"), None);
     let t = &im.table;
     assert_eq!(t.joints[6], "lbr_A7");
-    assert!(im.report.signals.iter().all(|s| s.time.has_stamp && s.time.log_time == 0));
+    assert!(im
+        .report
+        .signals
+        .iter()
+        .all(|s| s.time.has_stamp && s.time.log_time == 0));
     // No qdot in LBRState: qdot and qddot are backward differences of q (2 rows dropped).
     assert_eq!(im.report.dropped_leading_rows, 2);
     let (eq, _, etau) = state_errors(&im);
@@ -146,7 +162,10 @@ fn lbr_state_custom_type_with_its_own_stamp() {
     }
     assert!(e < 1e-9, "{e}");
     let (_, v) = t.label.as_ref().unwrap();
-    let truth_label = t.stamps_ns.iter().flat_map(|s| (0..7).map(move |i| label(i, secs(*s))));
+    let truth_label = t
+        .stamps_ns
+        .iter()
+        .flat_map(|s| (0..7).map(move |i| label(i, secs(*s))));
     assert!(max_err(v.iter().copied(), truth_label) < 1e-9);
 }
 
@@ -157,7 +176,10 @@ fn sqlite_bag_is_refused_with_the_conversion_command() {
         let e = import(&data(path), &builtin("franka"), &options).unwrap_err();
         assert!(matches!(e, BagError::Sqlite { .. }), "{e}");
         let text = e.to_string();
-        assert!(text.contains("rosbags-convert --src BAG --dst OUT --dst-storage mcap"), "{text}");
+        assert!(
+            text.contains("rosbags-convert --src BAG --dst OUT --dst-storage mcap"),
+            "{text}"
+        );
         assert!(text.contains("franka_sqlite"), "{text}");
     }
 }

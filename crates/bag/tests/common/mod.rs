@@ -12,13 +12,20 @@ use admittance_bag::msgs::{self, Header, JointState, Time};
 pub const T0_NS: i64 = 1_700_000_000 * 1_000_000_000;
 
 pub fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 /// (q, qdot, qddot, tau) of joint `i` at `s` seconds after T0 (make_bags.py's `truth`).
 pub fn truth(i: usize, s: f64) -> (f64, f64, f64, f64) {
     let fi = i as f64;
-    let (a, w, p, c) = (0.3 + 0.05 * fi, 2.0 * PI * (0.5 + 0.1 * fi), 0.2 * fi, 0.1 * fi);
+    let (a, w, p, c) = (
+        0.3 + 0.05 * fi,
+        2.0 * PI * (0.5 + 0.1 * fi),
+        0.2 * fi,
+        0.1 * fi,
+    );
     let q = a * (w * s + p).sin() + c;
     let qd = a * w * (w * s + p).cos();
     let qdd = -a * w * w * (w * s + p).sin();
@@ -43,7 +50,10 @@ pub fn secs(stamp_ns: i64) -> f64 {
 
 /// Largest |a - b|.
 pub fn max_err(a: impl IntoIterator<Item = f64>, b: impl IntoIterator<Item = f64>) -> f64 {
-    a.into_iter().zip(b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+    a.into_iter()
+        .zip(b)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
 }
 
 /// The JointState definition as rosbag2 embeds it (only the name matters to the reader).
@@ -95,8 +105,12 @@ pub fn write_mcap(path: &Path, messages: &[Out]) {
         let id = match channels.get(&m.topic) {
             Some(id) => *id,
             None => {
-                let schema = w.add_schema(&m.type_name, "ros2msg", JOINT_STATE_DEF.as_bytes()).unwrap();
-                let id = w.add_channel(schema, &m.topic, "cdr", &BTreeMap::new()).unwrap();
+                let schema = w
+                    .add_schema(&m.type_name, "ros2msg", JOINT_STATE_DEF.as_bytes())
+                    .unwrap();
+                let id = w
+                    .add_channel(schema, &m.topic, "cdr", &BTreeMap::new())
+                    .unwrap();
                 channels.insert(m.topic.clone(), id);
                 id
             }
