@@ -196,9 +196,11 @@ fn check_source(role: &str, s: &SignalSource, have_joints: bool) -> Result<(), S
             return Err(format!("[{role}] a WrenchStamped can only be the label"))
         }
         WRENCH_STAMPED if s.field != "wrench" => return bad_field("wrench"),
-        t if !t.contains("/msg/") => return Err(format!(
+        t if !t.contains("/msg/") => {
+            return Err(format!(
             "[{role}] type `{t}`: give the full rosbag2 name, such as sensor_msgs/msg/JointState"
-        )),
+        ))
+        }
         _ => {
             if !have_joints && s.type_name != WRENCH_STAMPED {
                 return Err(format!(
