@@ -126,10 +126,12 @@ impl<'p> Collector<'p> {
         let wanted: Vec<usize> = (0..self.signals.len())
             .filter(|i| self.signals[*i].source.topic == m.topic)
             .collect();
-        let Some(&first) = wanted.first() else {
+        if wanted.is_empty() {
             return Ok(());
-        };
-        self.check_type(first, m)?;
+        }
+        for i in &wanted {
+            self.check_type(*i, m)?;
+        }
         match self.decode(m, &wanted)? {
             Ok(samples) => {
                 for (i, (stamp, names, values)) in wanted.into_iter().zip(samples) {

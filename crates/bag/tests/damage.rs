@@ -286,3 +286,16 @@ fn a_bad_rate_and_too_short_a_bag_are_errors() {
     let e = import(&bag, &js_profile(true), &o).unwrap_err().to_string();
     assert!(e.contains("rate -5 Hz"), "{e}");
 }
+
+#[test]
+fn every_signal_of_a_topic_is_type_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let bag = js_bag(dir.path(), 5, |_, _, _| {});
+    let text = "name = \"mixed\"\ndescription = \"d\"\njoints = [\"j0\", \"j1\", \"j2\"]\n[q]\ntopic = \"/js\"\ntype = \"sensor_msgs/msg/JointState\"\nfield = \"position\"\n[tau]\ntopic = \"/js\"\ntype = \"std_msgs/msg/Float64MultiArray\"\nfield = \"data\"\n";
+    let profile = Profile::parse(text, "mixed.toml").unwrap();
+    let e = import(&bag, &profile, &options(false)).unwrap_err();
+    assert!(
+        matches!(&e, BagError::WrongType { signal, .. } if signal == "tau"),
+        "{e}"
+    );
+}
