@@ -1,6 +1,6 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
-//! train the learned observer (`train`, `grow`), query an arm's dynamics (`dynamics`,
-//! `model`).
+//! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
+//! `import` from a rosbag2 bag), query an arm's dynamics (`dynamics`, `model`).
 //!
 //! Exit codes:
 //!
@@ -9,12 +9,13 @@
 //! | 0 | success |
 //! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
 //! | 2 | bad command-line arguments (usage) |
-//! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder |
+//! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder, bag, profile |
 //!
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,
 //! and how to fix it.
 
 mod dynamics_cmd;
+mod import_cmd;
 mod list_cmd;
 mod progress;
 mod report_cmd;
@@ -50,6 +51,8 @@ enum Command {
     Train(train_cmd::TrainArgs),
     /// Add nodes to a trained network (incremental growth) and save the result.
     Grow(train_cmd::GrowArgs),
+    /// Free-motion training data (CSV) from a rosbag2 MCAP bag recorded on a real arm.
+    Import(import_cmd::ImportArgs),
 }
 
 /// A failure with its exit code and a short message.
@@ -120,6 +123,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_cmd::report(&args),
         Command::Train(args) => train_cmd::train(&args),
         Command::Grow(args) => train_cmd::grow(&args),
+        Command::Import(args) => import_cmd::import(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
