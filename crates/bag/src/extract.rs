@@ -278,7 +278,9 @@ impl Collector<'_> {
             let stamp = if self.signals[*i].source.stamp.is_some() {
                 let sec = it.next().and_then(|x| x.first().copied()).unwrap_or(0.0);
                 let nsec = it.next().and_then(|x| x.first().copied()).unwrap_or(0.0);
-                let ns = sec as i64 * 1_000_000_000 + nsec as i64;
+                let ns = (sec as i64)
+                    .saturating_mul(1_000_000_000)
+                    .saturating_add(nsec as i64);
                 (ns != 0).then_some(ns)
             } else {
                 None

@@ -128,7 +128,10 @@ fn tabulate(
     let t0 = stamps[0];
     let table = Table {
         joints: ex.joints.clone(),
-        t: stamps.iter().map(|s| (s - t0) as f64 / 1e9).collect(),
+        t: stamps
+            .iter()
+            .map(|s| s.saturating_sub(t0) as f64 / 1e9)
+            .collect(),
         q: cut(q_v, n),
         qdot: cut(qdot_v, n),
         qddot: cut(qddot_v, n),
@@ -157,9 +160,13 @@ fn tabulate(
             .series
             .iter()
             .flat_map(|s| {
-                resample::gaps(&s.stamps)
-                    .into_iter()
-                    .map(move |(a, len)| (s.topic.clone(), (a - t0) as f64 / 1e9, len as f64 / 1e9))
+                resample::gaps(&s.stamps).into_iter().map(move |(a, len)| {
+                    (
+                        s.topic.clone(),
+                        a.saturating_sub(t0) as f64 / 1e9,
+                        len as f64 / 1e9,
+                    )
+                })
             })
             .collect(),
         derivatives,

@@ -42,7 +42,10 @@ impl Table {
 
 /// The median spacing of increasing stamps (ns), `None` with fewer than two.
 pub fn median_period_ns(stamps: &[i64]) -> Option<i64> {
-    let mut d: Vec<i64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut d: Vec<i64> = stamps
+        .windows(2)
+        .map(|w| w[1].saturating_sub(w[0]))
+        .collect();
     if d.is_empty() {
         return None;
     }
@@ -57,8 +60,8 @@ pub fn gaps(stamps: &[i64]) -> Vec<(i64, i64)> {
     };
     stamps
         .windows(2)
-        .filter(|w| w[1] - w[0] > 10 * p)
-        .map(|w| (w[0], w[1] - w[0]))
+        .filter(|w| w[1].saturating_sub(w[0]) > p.saturating_mul(10))
+        .map(|w| (w[0], w[1].saturating_sub(w[0])))
         .collect()
 }
 
@@ -99,7 +102,8 @@ pub fn interpolate(s: &Series, grid: &[i64]) -> Vec<f64> {
             continue;
         }
         let b = &s.values[(i + 1) * n..(i + 2) * n];
-        let w = (t - s.stamps[i]) as f64 / (s.stamps[i + 1] - s.stamps[i]) as f64;
+        let span = i128::from(s.stamps[i + 1]) - i128::from(s.stamps[i]);
+        let w = (i128::from(t) - i128::from(s.stamps[i])) as f64 / span as f64;
         out.extend(a.iter().zip(b).map(|(a, b)| a + (b - a) * w));
     }
     out
@@ -118,6 +122,12 @@ pub fn backward_difference(x: &[f64], n: usize, dt: f64) -> Vec<f64> {
 /// The grid: the first series' (`q`'s) first stamp plus multiples of `period`, inside the
 /// span common to all series (so at the `q` topic's own rate the grid is its stamps).
 pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagError> {
+    if let Some(s) = series.iter().find(|s| s.stamps.is_empty()) {
+        return Err(BagError::Data {
+            bag: bag.to_path_buf(),
+            message: format!("{} `{}` has no sample", s.role, s.topic),
+        });
+    }
     let anchor = series.first().map_or(0, |s| s.stamps[0]);
     let start = series.iter().map(|s| s.stamps[0]).max().unwrap_or(0);
     let end = series
@@ -148,6 +158,8 @@ pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagE
         });
     }
     // The first grid point at or after `start`.
+    // In i128: stamps from damaged data may be anywhere in the i64 range.
+    let (anchor, start, end, period) = (anchor as i128, start as i128, end as i128, period as i128);
     let first = anchor + (start - anchor + period - 1) / period * period;
     if first > end {
         return Ok(Vec::new());
@@ -159,7 +171,7 @@ pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagE
             message: format!("{rows} rows at this rate: choose a lower --rate"),
         });
     }
-    Ok((0..rows).map(|k| first + k * period).collect())
+    Ok((0..rows).map(|k| (first + k * period) as i64).collect())
 }
 
 #[cfg(test)]

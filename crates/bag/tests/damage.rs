@@ -299,3 +299,43 @@ fn every_signal_of_a_topic_is_type_checked() {
         "{e}"
     );
 }
+
+#[test]
+fn extreme_stamps_and_log_times_give_errors_or_tables_not_overflows() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("extreme.mcap");
+    let cases: [&[(i64, u64)]; 3] = [
+        // (header stamp ns, 0 = zero stamp; log time ns)
+        &[(0, 0), (0, 1), (0, u64::MAX - 1), (0, u64::MAX)],
+        &[
+            (i32::MIN as i64 * 1_000_000_000, 5),
+            (0, 6),
+            (i32::MAX as i64 * 1_000_000_000, 7),
+            (i32::MAX as i64 * 1_000_000_000 + 1, 8),
+        ],
+        &[(1, 0), (2, u64::MAX), (3, 0), (4, u64::MAX)],
+    ];
+    for case in cases {
+        let messages: Vec<Out> = case
+            .iter()
+            .map(|(stamp, log)| {
+                let mut js = joint_state(3, 0, 0.1);
+                js.header.stamp = msgs::Time {
+                    sec: stamp.div_euclid(1_000_000_000) as i32,
+                    nanosec: stamp.rem_euclid(1_000_000_000) as u32,
+                };
+                js_message("/js", *log, &js)
+            })
+            .collect();
+        write_mcap(&path, &messages);
+        for qdot in [true, false] {
+            for rate in [None, Some(1e-9), Some(1e9)] {
+                let o = ImportOptions {
+                    rate_hz: rate,
+                    accept_damage: false,
+                };
+                let _ = import(&path, &js_profile(qdot), &o);
+            }
+        }
+    }
+}

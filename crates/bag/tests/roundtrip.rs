@@ -127,7 +127,10 @@ fn ur_needs_torque_constants_and_maps_joints_by_name() {
     let profile = Profile::parse(&text, "ur-test.toml").unwrap();
     let im = run("ur_plain", &profile, None);
     // The folder's metadata.yaml names the same bag.
-    assert_eq!(run("ur_plain/metadata.yaml", &profile, None).table, im.table);
+    assert_eq!(
+        run("ur_plain/metadata.yaml", &profile, None).table,
+        im.table
+    );
     assert_eq!(im.report.rate_hz, 500.0);
     assert_eq!(im.table.joints[0], "shoulder_pan_joint");
     let (eq, eqd, etau) = state_errors(&im);
