@@ -188,3 +188,62 @@ fn sqlite_bag_is_refused_with_the_conversion_command() {
         assert!(text.contains("franka_sqlite"), "{text}");
     }
 }
+
+#[test]
+fn float64_multi_array_torques_are_stamped_by_the_log_time_and_say_so() {
+    use admittance_bag::msgs::{self, Float64MultiArray, MultiArrayDimension, MultiArrayLayout};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("array.mcap");
+    let mut out = Vec::new();
+    for k in 0..50i64 {
+        let stamp = T0_NS + k * 1_000_000;
+        let s = secs(stamp);
+        out.push(js_message(
+            "/js",
+            stamp as u64 + 300_000,
+            &joint_state(3, stamp, s),
+        ));
+        // Torques on their own topic, no header: the log time is their only time. A
+        // leading element skipped by data_offset.
+        let mut data = vec![99.0];
+        // In the profile's joint order (j2, j0, j1): an array is positional.
+        data.extend([2, 0, 1].map(|i| -truth(i, s).3));
+        let array = Float64MultiArray {
+            layout: MultiArrayLayout {
+                dim: vec![MultiArrayDimension {
+                    label: "joints".into(),
+                    size: 3,
+                    stride: 3,
+                }],
+                data_offset: 1,
+            },
+            data,
+        };
+        out.push(Out {
+            topic: "/tau".into(),
+            type_name: "std_msgs/msg/Float64MultiArray".into(),
+            log_ns: stamp as u64,
+            data: msgs::encode(&array).unwrap(),
+        });
+    }
+    write_mcap(&path, &out);
+    let text = "name = \"array\"\ndescription = \"d\"\njoints = [\"j2\", \"j0\", \"j1\"]\n[q]\ntopic = \"/js\"\ntype = \"sensor_msgs/msg/JointState\"\nfield = \"position\"\n[tau]\ntopic = \"/tau\"\ntype = \"std_msgs/msg/Float64MultiArray\"\nfield = \"data\"\n";
+    let profile = Profile::parse(text, "array.toml").unwrap();
+    let im = import(&path, &profile, &ImportOptions::default()).unwrap();
+    let tau = &im.report.signals[1];
+    assert_eq!((tau.time.has_stamp, tau.time.log_time), (false, 50));
+    assert!(im
+        .report
+        .to_string()
+        .contains("log (receive) time: the type has no stamp"));
+    // q by name in the profile's order (j2, j0, j1); the array positionally in that order.
+    let t = &im.table;
+    for (k, s) in t.stamps_ns.iter().enumerate() {
+        let s = secs(*s);
+        assert_eq!(t.q[k * 3], truth(2, s).0);
+        assert_eq!(t.q[k * 3 + 1], truth(0, s).0);
+        for (c, i) in [2usize, 0, 1].iter().enumerate() {
+            assert!((t.tau[k * 3 + c] + truth(*i, s).3).abs() < 1e-12);
+        }
+    }
+}
