@@ -32,6 +32,14 @@ pub enum BagError {
         /// What is there instead.
         reason: String,
     },
+    /// The MCAP file uses a feature not read here (lz4 chunks).
+    #[error("{path}: {message}")]
+    Unsupported {
+        /// The `.mcap` file.
+        path: PathBuf,
+        /// What and how to convert.
+        message: String,
+    },
     /// The MCAP container is damaged (truncated, a chunk whose CRC or compression fails).
     #[error("{path}: damaged MCAP data after {messages_read} messages (last log time {last_log_time}): {message}; {hint}")]
     Damaged {

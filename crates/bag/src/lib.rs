@@ -12,7 +12,7 @@
 //! `metadata.yaml` is not needed: the schemas are embedded in the MCAP files; a split
 //! recording's files are read in name order), its `metadata.yaml`, or a single `.mcap`
 //! file. Chunks may be uncompressed or zstd-compressed (`ros2 bag record -s mcap
-//! --storage-preset-profile zstd_fast`); lz4 chunks are reported as unsupported. A sqlite3
+//! --storage-preset-profile zstd_fast`); lz4 chunks are refused with the conversion command. A sqlite3
 //! bag (`.db3`) is refused with the conversion command [`CONVERT_COMMAND`].
 //!
 //! Payloads are CDR. `builtin_interfaces/Time`, `std_msgs/Header`,

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::BagError;
+use crate::error::{BagError, CONVERT_COMMAND};
 
 /// The MCAP file's first bytes.
 const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
@@ -155,6 +155,14 @@ pub fn stream(
         let message = match next {
             None => break,
             Some(Ok(m)) => m,
+            Some(Err(mcap::McapError::UnsupportedCompression(c))) => {
+                return Err(BagError::Unsupported {
+                    path: file.to_path_buf(),
+                    message: format!(
+                        "chunks compressed with `{c}`; only uncompressed and zstd chunks are read: convert with `{CONVERT_COMMAND}` (uncompressed), or record with zstd"
+                    ),
+                })
+            }
             Some(Err(e)) if accept_damage => {
                 outcome.damage = Some(format!(
                     "{}: reading stopped after {} messages (last log time {}): {e}",

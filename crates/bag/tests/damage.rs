@@ -339,3 +339,38 @@ fn extreme_stamps_and_log_times_give_errors_or_tables_not_overflows() {
         }
     }
 }
+
+#[test]
+fn lz4_chunks_are_refused_with_the_conversion() {
+    let e = import(&data("franka_lz4.mcap"), &franka(), &options(true)).unwrap_err();
+    assert!(matches!(e, BagError::Unsupported { .. }), "{e}");
+    let e = e.to_string();
+    assert!(
+        e.contains("franka_lz4.mcap") && e.contains("`lz4`") && e.contains("rosbags-convert"),
+        "{e}"
+    );
+}
+
+#[test]
+fn chunk_crcs_catch_flipped_bytes_in_compressed_data() {
+    // franka_crc_zstd.mcap (written by the mcap package) stores chunk CRCs.
+    let im = import(&data("franka_crc_zstd.mcap"), &franka(), &options(false)).unwrap();
+    assert!(im.table.len() > 90);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("crc.mcap");
+    let bytes = std::fs::read(data("franka_crc_zstd.mcap")).unwrap();
+    let frame = bytes
+        .windows(4)
+        .position(|w| w == [0x28, 0xb5, 0x2f, 0xfd])
+        .unwrap();
+    for offset in [40, 400, 4000] {
+        let mut flipped = bytes.clone();
+        flipped[frame + offset] ^= 0x10;
+        std::fs::write(&path, &flipped).unwrap();
+        let e = import(&path, &franka(), &options(false)).unwrap_err();
+        assert!(
+            matches!(e, BagError::Damaged { .. }),
+            "offset {offset}: {e}"
+        );
+    }
+}

@@ -2,7 +2,7 @@
 no ROS): a known analytic trajectory on each profile's real topic names, so that the Rust
 tests compare the imported columns with the truth.
 
-    python3 -m venv .venv-bag && .venv-bag/bin/pip install rosbags
+    python3 -m venv .venv-bag && .venv-bag/bin/pip install rosbags mcap  # 0.11.9, 1.6.0
     .venv-bag/bin/python crates/bag/tests/make_bags.py crates/bag/tests/data
 
 The truth (the same formulas are in crates/bag/tests/common/mod.rs), joint i = 0..n-1,
@@ -91,27 +91,56 @@ def stamps(rate, seconds, offset_ns=0):
 
 
 class Bag:
-    def __init__(self, path, storage=StoragePlugin.MCAP, zstd=False):
+    """A rosbags Writer (a rosbag2 folder), or with `mcap_compression` a single MCAP file
+    written with the `mcap` package (which stores chunk CRCs and can write lz4)."""
+
+    def __init__(self, path, storage=StoragePlugin.MCAP, zstd=False, mcap_compression=None):
         self.ts = get_typestore(Stores.ROS2_HUMBLE)
         self.ts.register(get_types_from_msg(LBR_STATE, "lbr_fri_idl/msg/LBRState"))
-        self.w = Writer(path, version=9, storage_plugin=storage)
-        if zstd:
-            self.w.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
-        self.w.open()
+        self.path = path
+        self.mcap_compression = mcap_compression
+        self.w = None
+        if mcap_compression is None:
+            self.w = Writer(path, version=9, storage_plugin=storage)
+            if zstd:
+                self.w.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+            self.w.open()
         self.conns = {}
         self.pending = []
 
     def add(self, topic, msgtype, t_ns, msg, k):
         if topic not in self.conns:
-            self.conns[topic] = self.w.add_connection(topic, msgtype, typestore=self.ts)
+            self.conns[topic] = (
+                self.w.add_connection(topic, msgtype, typestore=self.ts) if self.w else msgtype
+            )
         data = self.ts.serialize_cdr(msg, msgtype)
         self.pending.append((t_ns + latency_ns(k), topic, data))
 
     def close(self):
         # A recorder writes in receive order.
-        for log, topic, data in sorted(self.pending, key=lambda x: x[0]):
+        pending = sorted(self.pending, key=lambda x: x[0])
+        if self.w is None:
+            return self.close_mcap(pending)
+        for log, topic, data in pending:
             self.w.write(self.conns[topic], log, data)
         self.w.close()
+
+    def close_mcap(self, pending):
+        from mcap.writer import Writer as McapWriter
+
+        with open(self.path, "wb") as f:
+            w = McapWriter(f, compression=self.mcap_compression, enable_crcs=True)
+            w.start(profile="ros2", library="make_bags.py")
+            channels = {}
+            for topic, msgtype in self.conns.items():
+                msgdef = self.ts.generate_msgdef(msgtype)[0]
+                schema = w.register_schema(name=msgtype, encoding="ros2msg", data=msgdef.encode())
+                channels[topic] = w.register_channel(topic=topic, message_encoding="cdr",
+                                                     schema_id=schema)
+            for seq, (log, topic, data) in enumerate(pending):
+                w.add_message(channel_id=channels[topic], log_time=log, publish_time=log,
+                              data=data, sequence=seq)
+            w.finish()
 
     def header(self, t_ns):
         T = self.ts.types
@@ -136,8 +165,8 @@ class Bag:
         self.add(topic, "geometry_msgs/msg/WrenchStamped", t_ns, msg, k)
 
 
-def franka(path, seconds, zstd, storage=StoragePlugin.MCAP):
-    bag = Bag(path, storage, zstd)
+def franka(path, seconds, zstd, storage=StoragePlugin.MCAP, mcap_compression=None):
+    bag = Bag(path, storage, zstd, mcap_compression)
     base = "/franka_robot_state_broadcaster/"
     for k, t in enumerate(stamps(1000, seconds)):
         s = (t - T0_NS) / 1e9
@@ -195,7 +224,9 @@ def single_file(folder, target):
 def main(out):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    for name in ["franka_zstd", "franka_plain.mcap", "ur_plain", "lbr_zstd", "franka_sqlite"]:
+    names = ["franka_zstd", "franka_plain.mcap", "ur_plain", "lbr_zstd", "franka_sqlite",
+             "franka_crc_zstd.mcap", "franka_lz4.mcap"]
+    for name in names:
         p = out / name
         if p.is_dir():
             shutil.rmtree(p)
@@ -207,6 +238,10 @@ def main(out):
     ur(out / "ur_plain", 0.2)
     lbr(out / "lbr_zstd", 0.5)
     franka(out / "franka_sqlite", 0.01, zstd=False, storage=StoragePlugin.SQLITE3)
+    from mcap.writer import CompressionType
+
+    franka(out / "franka_crc_zstd.mcap", 0.1, zstd=False, mcap_compression=CompressionType.ZSTD)
+    franka(out / "franka_lz4.mcap", 0.02, zstd=False, mcap_compression=CompressionType.LZ4)
     total = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
     print(f"wrote {out}: {total} bytes")
 

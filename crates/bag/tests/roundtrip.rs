@@ -247,3 +247,10 @@ fn float64_multi_array_torques_are_stamped_by_the_log_time_and_say_so() {
         }
     }
 }
+
+#[test]
+fn franka_zstd_single_file_from_the_mcap_package() {
+    let im = run("franka_crc_zstd.mcap", &builtin("franka"), None);
+    let (eq, eqd, etau) = state_errors(&im);
+    assert!(eq < 1e-9 && eqd < 1e-9 && etau < 1e-9, "{eq} {eqd} {etau}");
+}
