@@ -1,6 +1,6 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
-//! train the learned observer (`train`, `grow`), query an arm's dynamics (`dynamics`,
-//! `model`).
+//! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
+//! `import` from a rosbag2 bag), query an arm's dynamics (`dynamics`, `model`).
 //!
 //! Exit codes:
 //!
@@ -9,7 +9,7 @@
 //! | 0 | success |
 //! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
 //! | 2 | bad command-line arguments (usage) |
-//! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder |
+//! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder, bag, profile |
 //! | 130 | interrupted (Ctrl-C): one line says so; nothing of the user's was changed |
 //!
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,
@@ -19,6 +19,7 @@ mod dynamics_cmd;
 mod evaluate_cmd;
 mod identify_cmd;
 mod interrupt;
+mod import_cmd;
 mod list_cmd;
 mod progress;
 mod report_cmd;
@@ -58,6 +59,8 @@ enum Command {
     Identify(identify_cmd::IdentifyArgs),
     /// Run every estimator the given files allow over a free-motion recording and print its false torque.
     Evaluate(evaluate_cmd::EvaluateArgs),
+    /// Free-motion training data (CSV) from a rosbag2 MCAP bag recorded on a real arm.
+    Import(import_cmd::ImportArgs),
 }
 
 /// A failure with its exit code and a short message.
@@ -131,6 +134,7 @@ fn main() -> ExitCode {
         Command::Grow(args) => train_cmd::grow(&args),
         Command::Identify(args) => identify_cmd::identify_cmd(&args),
         Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
+        Command::Import(args) => import_cmd::import(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
