@@ -9,7 +9,6 @@ use std::sync::Arc;
 use admittance_dynamics::{identify as rust_identify, Data, Identification, IdentificationSettings, Model, Samples};
 use numpy::PyArray2;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use crate::convert::{rows, value_error, vector_out};
 use crate::model::PyModel;
@@ -172,5 +171,13 @@ fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py
     py.import("json")?.call_method1("loads", (v.to_string(),))
 }
 
-#[allow(dead_code)]
-fn _unused(_: &Bound<'_, PyDict>) {}
+/// A nominal model argument: a `Model` (its URDF alone) or an `Identification`.
+pub(crate) fn nominal_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Arc<Identification>> {
+    if let Ok(i) = obj.cast::<PyIdentification>() {
+        return Ok(i.get().identification.clone());
+    }
+    if let Ok(m) = obj.cast::<PyModel>() {
+        return Ok(Arc::new(Identification::from_model(m.get().model.as_ref().clone())));
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!("`{name}` must be a Model or an Identification")))
+}

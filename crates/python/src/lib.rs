@@ -17,6 +17,7 @@ mod admittance;
 mod config;
 mod control;
 mod convert;
+mod identification;
 mod model;
 mod network;
 mod observers;
@@ -40,6 +41,8 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(network::train, m)?,
         wrap_pyfunction!(network::load_network, m)?,
         wrap_pyfunction!(run::run, m)?,
+        wrap_pyfunction!(identification::identify, m)?,
+        wrap_pyfunction!(identification::load_identification, m)?,
     ] {
         m.add_function(f)?;
     }
@@ -55,6 +58,7 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<observers::PyInputConditioner>()?;
     m.add_class::<admittance::PyAdmittance>()?;
     m.add_class::<network::PyNetwork>()?;
+    m.add_class::<identification::PyIdentification>()?;
     m.add("RunFailed", m.py().get_type::<run::RunFailed>())?;
     Ok(())
 }

@@ -9,7 +9,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use admittance_dynamics::{rnea, Data, Model};
+use admittance_dynamics::Identification;
 use admittance_learning::broad::{
     fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec, WidthRule,
 };
@@ -30,7 +30,7 @@ struct TrainOptions {
     /// `None`: a separate validation set was given (every data row trained).
     validation_fraction: Option<f64>,
     input_filter_hz: f64,
-    nominal: Option<Arc<Model>>,
+    nominal: Option<Arc<Identification>>,
     joints: Vec<String>,
 }
 
@@ -166,7 +166,7 @@ pub(crate) fn training_arrays(
     n: usize,
     joints: Option<&[String]>,
     input_filter_hz: f64,
-    nominal: Option<&Model>,
+    nominal: Option<&Identification>,
 ) -> PyResult<(Vec<f64>, Vec<f64>, usize)> {
     let (data, source) = match data {
         DataArg::Csv(path) => (
@@ -196,15 +196,10 @@ pub(crate) fn training_arrays(
                 "`input_filter_hz` {input_filter_hz} with the data of {source}: {e}"
             ))
         })?;
-    if let Some(model) = nominal {
-        // What the nominal model misses: the hybrid observer's residual network, as the
-        // scenarios train it (admittance_scenario training).
-        let mut d = Data::new(model);
-        for (row, target) in x.chunks_exact(3 * n).zip(y.chunks_exact_mut(n)) {
-            let tau = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
-                .map_err(|e| value_error(format!("`nominal`: {e}")))?;
-            target.iter_mut().zip(tau.iter()).for_each(|(t, m)| *t -= m);
-        }
+    if let Some(nominal) = nominal {
+        // What the nominal model (a URDF model, or an identification with its joint terms)
+        // misses: the hybrid observer's residual network.
+        nominal.subtract_from(&x, &mut y).map_err(|e| value_error(format!("`nominal`: {e}")))?;
     }
     Ok((x, y, data.len()))
 }
@@ -329,7 +324,7 @@ pub fn train(
     seed: Option<u64>,
     width_scale: f64,
     width_neighbours: usize,
-    nominal: Option<&Bound<'_, PyModel>>,
+    nominal: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyNetwork> {
     let model = m.get().model.clone();
     let n = model.nq();
@@ -349,10 +344,10 @@ pub fn train(
             "`friction_scales` needs `friction_features=True`",
         ));
     }
-    let nominal = match nominal {
+    let nominal = match nominal.filter(|v| !v.is_none()) {
         Some(nm) => {
-            let nm = nm.get().model.clone();
-            if nm.joint_names().ne(model.joint_names()) {
+            let nm = crate::identification::nominal_arg(nm, "nominal")?;
+            if nm.model.joint_names().ne(model.joint_names()) {
                 return Err(value_error(
                     "`nominal` must have the joints of `m`, in the same order",
                 ));
@@ -453,7 +448,7 @@ impl PyNetwork {
         validation: Option<&Bound<'_, PyAny>>,
         validation_fraction: Option<f64>,
         input_filter_hz: Option<f64>,
-        nominal: Option<&Bound<'_, PyModel>>,
+        nominal: Option<&Bound<'_, PyAny>>,
         seed: u64,
     ) -> PyResult<()> {
         let n = self.joints();
@@ -474,8 +469,8 @@ impl PyNetwork {
             },
         };
         let filter = input_filter_hz.unwrap_or(trained.as_ref().map_or(0.0, |o| o.input_filter_hz));
-        let nominal = match nominal {
-            Some(nm) => Some(nm.get().model.clone()),
+        let nominal = match nominal.filter(|v| !v.is_none()) {
+            Some(nm) => Some(crate::identification::nominal_arg(nm, "nominal")?),
             None => trained.as_ref().and_then(|o| o.nominal.clone()),
         };
         let train_arg = data_arg(data, "data", n, joints.as_deref())?;

@@ -13,7 +13,6 @@ use pyo3::prelude::*;
 use crate::config;
 use crate::control::FaultRecord;
 use crate::convert::{config_error, read_vector, require_finite, value_error, vector, vector_out};
-use crate::model::PyModel;
 use crate::network::PyNetwork;
 
 pub(crate) enum AnyObserver {
@@ -189,7 +188,21 @@ fn momentum_config(
     }
 }
 
-/// The generalised-momentum observer on the nominal model `m` (docs/method.md section 5): the
+/// The momentum observer on a nominal model: a URDF model as it is (bit for bit the
+/// observer of the scenarios), or an identification with its joint terms.
+fn momentum(
+    nominal: &admittance_dynamics::Identification,
+    cfg: &MomentumObserverConfig,
+) -> Result<MomentumObserver, admittance_control::ConfigError> {
+    if nominal.has_joint_terms() {
+        MomentumObserver::from_identification(nominal, cfg)
+    } else {
+        MomentumObserver::new(std::sync::Arc::new(nominal.model.clone()), cfg)
+    }
+}
+
+/// The generalised-momentum observer on the nominal model `m` (a `Model` or an
+/// `Identification`; docs/method.md section 5): the
 /// estimate follows the true external torque (less the friction `m` does not know) through
 /// a first-order lag of time constant `1 / gain` (1/s; default 50).
 ///
@@ -202,15 +215,14 @@ impl PyMomentumObserver {
     #[new]
     #[pyo3(signature = (m, gain=None, config=None))]
     fn new(
-        m: &Bound<'_, PyModel>,
+        m: &Bound<'_, PyAny>,
         gain: Option<&Bound<'_, PyAny>>,
         config: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyClassInitializer<Self>> {
-        let model = m.get().model.clone();
-        let n = model.nq();
+        let nominal = crate::identification::nominal_arg(m, "m")?;
+        let n = nominal.model.nq();
         let cfg = momentum_config(gain, config, n, "MomentumObserver config")?;
-        let o =
-            MomentumObserver::new(model, &cfg).map_err(|e| config_error("MomentumObserver", e))?;
+        let o = momentum(&nominal, &cfg).map_err(|e| config_error("MomentumObserver", e))?;
         Ok(
             PyClassInitializer::from(PyObserver::new(AnyObserver::Momentum(Box::new(o)), n))
                 .add_subclass(Self),
@@ -251,16 +263,15 @@ impl PyHybridObserver {
     #[new]
     #[pyo3(signature = (m, network, gain=None, config=None))]
     fn new(
-        m: &Bound<'_, PyModel>,
+        m: &Bound<'_, PyAny>,
         network: PyRef<'_, PyNetwork>,
         gain: Option<&Bound<'_, PyAny>>,
         config: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyClassInitializer<Self>> {
-        let model = m.get().model.clone();
-        let n = model.nq();
+        let nominal = crate::identification::nominal_arg(m, "m")?;
+        let n = nominal.model.nq();
         let cfg = momentum_config(gain, config, n, "HybridObserver config")?;
-        let momentum =
-            MomentumObserver::new(model, &cfg).map_err(|e| config_error("HybridObserver", e))?;
+        let momentum = momentum(&nominal, &cfg).map_err(|e| config_error("HybridObserver", e))?;
         let o = HybridObserver::new(momentum, network.deployment_copy())
             .map_err(|e| config_error("HybridObserver", e))?;
         Ok(

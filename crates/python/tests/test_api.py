@@ -13,6 +13,7 @@ CONTRACT = {
     "MomentumObserver", "LearnedObserver", "HybridObserver",
     "NeuralController", "PdController", "ComputedTorqueController",
     "Admittance", "train", "load_network", "run",
+    "identify", "Identification", "load_identification",
 }
 
 

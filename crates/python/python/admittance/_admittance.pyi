@@ -9,7 +9,7 @@ is then written and returned.
 
 import pathlib
 from os import PathLike
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -215,7 +215,10 @@ class MomentumObserver(Observer):
     ``[observer.momentum]``."""
 
     def __init__(
-        self, m: Model, gain: Optional[Union[float, ArrayLike]] = None, config: Optional[Config] = None
+        self,
+        m: Union[Model, "Identification"],
+        gain: Optional[Union[float, ArrayLike]] = None,
+        config: Optional[Config] = None,
     ) -> None: ...
 
 class LearnedObserver(Observer):
@@ -230,7 +233,7 @@ class HybridObserver(Observer):
 
     def __init__(
         self,
-        m: Model,
+        m: Union[Model, "Identification"],
         network: "Network",
         gain: Optional[Union[float, ArrayLike]] = None,
         config: Optional[Config] = None,
@@ -377,7 +380,7 @@ def train(
     seed: Optional[int] = None,
     width_scale: float = 2.0,
     width_neighbours: int = 8,
-    nominal: Optional[Model] = None,
+    nominal: Optional[Union[Model, "Identification"]] = None,
 ) -> Network:
     """Fits the learned observer's network to free-motion data (``admittance train``): the last
     ``validation_fraction`` (default 0.2) of the rows, or a separate ``validation`` set, choose
@@ -386,6 +389,40 @@ def train(
 
 def load_network(path: StrPath) -> Network:
     """Loads a network written by ``Network.save`` or ``admittance train``."""
+
+class Identification:
+    """An identified arm (``identify``, ``load_identification``): the rigid-body ``model``
+    with identified inertias (kept physically possible) and per-joint rotor inertia,
+    friction, offset and springs. Every consumer of a nominal model takes it."""
+
+    @property
+    def model(self) -> Model:
+        """The identified rigid-body model (the URDF's kinematics)."""
+    @property
+    def joint_terms(self) -> List[dict]:
+        """Per joint: armature, viscous, coulomb (two levels), coulomb_width, offset, spring."""
+    @property
+    def summary(self) -> dict:
+        """Chosen settings and the expected false torque per joint (N m rms) on motion it was
+        not trained on."""
+    def predict(self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> FloatArray:
+        """The torque the identified arm needs: ``(n,)`` or ``(N, n)`` rows."""
+    def save(self, path: StrPath, data: Optional[str] = None) -> None:
+        """Writes the identification file (JSON, versioned, checksummed, atomic)."""
+
+def identify(
+    data: FreeMotionData,
+    m: Model,
+    friction: bool = True,
+    validation: Optional[FreeMotionData] = None,
+    input_filter_hz: float = 0.0,
+    springs: bool = True,
+) -> Identification:
+    """Identifies the arm from free motion (``admittance identify``): settings chosen on
+    ``validation`` or by blocked cross-validation over contiguous stretches. Releases the GIL."""
+
+def load_identification(path: StrPath, m: Optional[Model] = None) -> Identification:
+    """Reads an identification file with the URDF it names (or applied to ``m``)."""
 
 
 class RunFailed(RuntimeError):

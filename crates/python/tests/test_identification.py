@@ -1,0 +1,127 @@
+"""Identification from Python (issue 22's contract): identify, predict, model, save/load,
+the momentum and hybrid observers and train taking an Identification as their nominal model;
+judged on motion the fit never saw, and on the real Baxter recording when it is available
+($ADMITTANCE_DATA, which .ci/run points at the shared data folder)."""
+
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+import admittance as adm
+
+
+def multisine(m, seed, seconds, rate=200.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * rate)) / rate
+    n = m.n
+    q = np.zeros((len(t), n))
+    qd = np.zeros_like(q)
+    qdd = np.zeros_like(q)
+    for i in range(n):
+        for h in range(1, 4):
+            w = 2 * np.pi * rng.uniform(0.1, 0.6)
+            a, ph = 0.5 / h, rng.uniform(0, 2 * np.pi)
+            q[:, i] += a * np.sin(w * t + ph)
+            qd[:, i] += a * w * np.cos(w * t + ph)
+            qdd[:, i] -= a * w * w * np.sin(w * t + ph)
+    return t, q, qd, qdd
+
+
+def torques(m, q, qd, qdd, friction):
+    tau = np.array([adm.rnea(m, a, b, c) for a, b, c in zip(q, qd, qdd)])
+    return tau + friction[0] * qd + friction[1] * np.tanh(qd / 0.01) + friction[2]
+
+
+@pytest.fixture(scope="module")
+def truth_and_data(baxter):
+    n = baxter.n
+    friction = (np.linspace(1.0, 2.0, n), np.linspace(2.0, 0.5, n), np.linspace(-0.5, 0.5, n))
+    t, q, qd, qdd = multisine(baxter, 1, 30.0)
+    data = {"t": t, "q": q, "qdot": qd, "qddot": qdd, "tau": torques(baxter, q, qd, qdd, friction)}
+    return friction, data
+
+
+def test_identify_predicts_other_motion(baxter, truth_and_data):
+    friction, data = truth_and_data
+    ident = adm.identify(data, baxter)
+    _, q, qd, qdd = multisine(baxter, 7, 10.0)
+    truth = torques(baxter, q, qd, qdd, friction)
+    pred = ident.predict(q, qd, qdd)
+    assert pred.shape == truth.shape
+    urdf_only = np.array([adm.rnea(baxter, a, b, c) for a, b, c in zip(q, qd, qdd)])
+    err = np.sqrt(np.mean((pred - truth) ** 2))
+    assert err < 0.02 * np.sqrt(np.mean((urdf_only - truth) ** 2)), err
+    one = ident.predict(q[0], qd[0], qdd[0])
+    assert one.shape == (baxter.n,) and np.allclose(one, pred[0])
+    assert isinstance(ident.model, adm.Model)
+    s = ident.summary
+    assert "blocked cross-validation" in s["held_out"] and len(s["expected_false_torque_rms"]) == baxter.n
+    assert len(ident.joint_terms) == baxter.n and "viscous" in ident.joint_terms[0]
+
+
+def test_save_load_and_observers(baxter, truth_and_data, tmp_path):
+    _, data = truth_and_data
+    ident = adm.identify(data, baxter)
+    path = tmp_path / "baxter.ident.json"
+    ident.save(path)
+    back = adm.load_identification(path)
+    q, qd, qdd = data["q"][:5], data["qdot"][:5], data["qddot"][:5]
+    assert np.array_equal(back.predict(q, qd, qdd), ident.predict(q, qd, qdd))
+    assert np.array_equal(adm.load_identification(path, baxter).predict(q, qd, qdd), ident.predict(q, qd, qdd))
+    # A user's file is not overwritten.
+    mine = tmp_path / "mine.json"
+    mine.write_text("{}")
+    with pytest.raises(ValueError, match="not an identification file"):
+        ident.save(mine)
+    assert mine.read_text() == "{}"
+    # The momentum observer on the identification reports (almost) no false torque in
+    # free motion; on the bare URDF it reports the friction.
+    def false_torque(observer):
+        est = []
+        for k in range(len(data["t"])):
+            est.append(observer.update(data["t"][k], data["q"][k], data["qdot"][k], data["qddot"][k], data["tau"][k], 0.005).copy())
+        return np.sqrt(np.mean(np.array(est)[400:] ** 2))
+    on_ident = false_torque(adm.MomentumObserver(ident, gain=50.0))
+    on_urdf = false_torque(adm.MomentumObserver(baxter, gain=50.0))
+    assert on_ident < 0.1 * on_urdf, (on_ident, on_urdf)
+    net = adm.train(data, baxter, 50, friction_features=True, nominal=ident)
+    hybrid = adm.HybridObserver(ident, net, gain=50.0)
+    assert false_torque(hybrid) < 0.1 * on_urdf
+
+
+def test_bad_input_is_named(baxter):
+    with pytest.raises(ValueError):
+        adm.identify({"t": np.zeros(3), "q": np.zeros((3, 2)), "qdot": np.zeros((3, 2)), "qddot": np.zeros((3, 2)), "tau": np.zeros((3, 2))}, baxter)
+    with pytest.raises(TypeError, match="Model or an Identification"):
+        adm.MomentumObserver("baxter.urdf")
+
+
+DATA = os.environ.get("ADMITTANCE_DATA")
+
+
+@pytest.mark.skipif(not DATA or not (pathlib.Path(DATA) / "baxter_rand" / "baxter_rand.csv").exists(),
+                    reason="the real Baxter recording (set ADMITTANCE_DATA to the folder holding baxter_rand/)")
+def test_real_baxter_held_out(baxter):
+    """Trained on the first 120 s, judged on the last 30 s it never saw: the bar of issue 22
+    (<= 1.0 N m rms, nMSE <= 0.4) for the momentum observer on the identification."""
+    csv = pathlib.Path(DATA) / "baxter_rand" / "baxter_rand.csv"
+    raw = np.loadtxt(csv, delimiter=",", skiprows=1)
+    t = raw[:, 0]
+    cols = {k: raw[:, 1 + 7 * j: 8 + 7 * j] for j, k in enumerate(["q", "qdot", "qddot", "tau"])}
+    train = t < 120.0
+    data = {"t": t[train], **{k: v[train] for k, v in cols.items()}}
+    ident = adm.identify(data, baxter, input_filter_hz=4.0)
+    cond = adm.InputConditioner(7, 4.0, 100.0)
+    obs = adm.MomentumObserver(ident, gain=50.0)
+    est = []
+    for k in range(len(t)):
+        q, qd, qdd, tau = cond.update(cols["q"][k], cols["tau"][k])
+        e = obs.update(t[k], q, qd, qdd, tau, 0.01).copy()
+        if t[k] >= 120.0:
+            est.append(e)
+    est = np.array(est)
+    rms = np.sqrt(np.mean(est ** 2))
+    nmse = np.mean(np.mean(est ** 2, axis=0) / np.var(cols["tau"][~train], axis=0))
+    assert rms <= 1.0 and nmse <= 0.4, (rms, nmse)
