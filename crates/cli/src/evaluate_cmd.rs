@@ -7,7 +7,9 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use admittance_control::{HybridObserver, MomentumObserver, MomentumObserverConfig, Observer, ObserverInput, StepStatus};
+use admittance_control::{
+    HybridObserver, MomentumObserver, MomentumObserverConfig, Observer, ObserverInput, StepStatus,
+};
 use admittance_dynamics::{rnea, Data, Identification};
 use admittance_learning::broad::BroadModel;
 use clap::Args;
@@ -52,7 +54,11 @@ struct Score {
 
 impl Score {
     fn new(name: impl Into<String>, n: usize) -> Self {
-        Score { name: name.into(), sq: vec![0.0; n], count: 0 }
+        Score {
+            name: name.into(),
+            sq: vec![0.0; n],
+            count: 0,
+        }
     }
     fn add(&mut self, false_torque: &[f64]) {
         for (s, e) in self.sq.iter_mut().zip(false_torque) {
@@ -65,7 +71,13 @@ impl Score {
 fn load_network(path: &PathBuf, n: usize) -> Result<BroadModel, CliError> {
     let net = BroadModel::load(path).map_err(|e| CliError::input(e.to_string()))?;
     if net.d_in() != 3 * n || net.d_out() != n {
-        return Err(CliError::input(format!("{}: maps {} inputs to {} outputs; this arm needs [q, qdot, qddot] ({}) to {n}", path.display(), net.d_in(), net.d_out(), 3 * n)));
+        return Err(CliError::input(format!(
+            "{}: maps {} inputs to {} outputs; this arm needs [q, qdot, qddot] ({}) to {n}",
+            path.display(),
+            net.d_in(),
+            net.d_out(),
+            3 * n
+        )));
     }
     Ok(net)
 }
@@ -76,7 +88,12 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
     let data = crate::train_cmd::load_data(&args.data, Some(&joints))?;
     let first = data.t.iter().take_while(|t| **t < args.from).count();
     if data.len() - first < 10 {
-        return Err(CliError::usage(format!("--from {}: only {} rows of {} are at or after it", args.from, data.len() - first, args.data.display())));
+        return Err(CliError::usage(format!(
+            "--from {}: only {} rows of {} are at or after it",
+            args.from,
+            data.len() - first,
+            args.data.display()
+        )));
     }
     let n = arm.nq();
     let rows = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
@@ -84,19 +101,40 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         Some(p) => Some(Identification::load(p, &arm).map_err(|e| CliError::input(e.to_string()))?),
         None => None,
     };
-    let networks: Vec<(String, BroadModel)> = args.network.iter().map(|p| Ok((p.display().to_string(), load_network(p, n)?))).collect::<Result<_, CliError>>()?;
-    let residual = args.residual.as_ref().map(|p| load_network(p, n)).transpose()?;
+    let networks: Vec<(String, BroadModel)> = args
+        .network
+        .iter()
+        .map(|p| Ok((p.display().to_string(), load_network(p, n)?)))
+        .collect::<Result<_, CliError>>()?;
+    let residual = args
+        .residual
+        .as_ref()
+        .map(|p| load_network(p, n))
+        .transpose()?;
     if residual.is_some() && ident.is_none() {
-        return Err(CliError::usage("--residual needs --identification (the model whose residual it learned)"));
+        return Err(CliError::usage(
+            "--residual needs --identification (the model whose residual it learned)",
+        ));
     }
-    let config = MomentumObserverConfig { gain: admittance_control::JointValues::Uniform(args.gain) };
+    let config = MomentumObserverConfig {
+        gain: admittance_control::JointValues::Uniform(args.gain),
+    };
     let err = |e: admittance_control::ConfigError| CliError::usage(e.to_string());
-    let mut observers: Vec<(String, Box<dyn Observer>)> = vec![("momentum (URDF)".into(), Box::new(MomentumObserver::new(Arc::new(arm.clone()), &config).map_err(err)?))];
+    let mut observers: Vec<(String, Box<dyn Observer>)> = vec![(
+        "momentum (URDF)".into(),
+        Box::new(MomentumObserver::new(Arc::new(arm.clone()), &config).map_err(err)?),
+    )];
     if let Some(id) = &ident {
-        observers.push(("momentum (identified)".into(), Box::new(MomentumObserver::from_identification(id, &config).map_err(err)?)));
+        observers.push((
+            "momentum (identified)".into(),
+            Box::new(MomentumObserver::from_identification(id, &config).map_err(err)?),
+        ));
         if let Some(r) = &residual {
             let m = MomentumObserver::from_identification(id, &config).map_err(err)?;
-            observers.push(("hybrid (identified + residual)".into(), Box::new(HybridObserver::new(m, r.clone()).map_err(err)?)));
+            observers.push((
+                "hybrid (identified + residual)".into(),
+                Box::new(HybridObserver::new(m, r.clone()).map_err(err)?),
+            ));
         }
     }
     let mut statics: Vec<Score> = vec![Score::new("URDF (RNEA)", n)];
@@ -110,15 +148,32 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
     for (name, _) in &networks {
         statics.push(Score::new(format!("network {name}"), n));
     }
-    let mut dynamic: Vec<Score> = observers.iter().map(|(name, _)| Score::new(name.clone(), n)).collect();
+    let mut dynamic: Vec<Score> = observers
+        .iter()
+        .map(|(name, _)| Score::new(name.clone(), n))
+        .collect();
     let mut faults = vec![0usize; observers.len()];
-    let (mut data_urdf, mut out, mut est, mut x) = (Data::new(&arm), vec![0.0; n], vec![0.0; n], vec![0.0; 3 * n]);
+    let (mut data_urdf, mut out, mut est, mut x) = (
+        Data::new(&arm),
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; 3 * n],
+    );
     let mut data_ident = ident.as_ref().map(|i| Data::new(&i.model));
-    let mut ws = networks.first().map(|(_, m)| m.workspace()).or_else(|| residual.as_ref().map(|r| r.workspace())).unwrap_or_default();
+    let mut ws = networks
+        .first()
+        .map(|(_, m)| m.workspace())
+        .or_else(|| residual.as_ref().map(|r| r.workspace()))
+        .unwrap_or_default();
     let (mut tau_sum, mut tau_sq) = (vec![0.0; n], vec![0.0; n]);
     for k in first..data.len() {
         let r = k * n..(k + 1) * n;
-        let (q, qd, qdd, tau) = (&rows.q[r.clone()], &rows.qdot[r.clone()], &rows.qddot[r.clone()], &rows.tau[r.clone()]);
+        let (q, qd, qdd, tau) = (
+            &rows.q[r.clone()],
+            &rows.qdot[r.clone()],
+            &rows.qddot[r.clone()],
+            &rows.tau[r.clone()],
+        );
         // nMSE is relative to the recorded torque's variance (not the conditioned one).
         for i in 0..n {
             let raw = data.tau[k * n + i];
@@ -128,24 +183,30 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         x[..n].copy_from_slice(q);
         x[n..2 * n].copy_from_slice(qd);
         x[2 * n..].copy_from_slice(qdd);
-        let model_tau = rnea(&arm, &mut data_urdf, q, qd, qdd).map_err(|e| CliError::input(e.to_string()))?;
+        let model_tau =
+            rnea(&arm, &mut data_urdf, q, qd, qdd).map_err(|e| CliError::input(e.to_string()))?;
         let mut s = 0;
-        let diff = |a: &[f64], b: &[f64], o: &mut [f64]| o.iter_mut().enumerate().for_each(|(i, v)| *v = a[i] - b[i]);
+        let diff = |a: &[f64], b: &[f64], o: &mut [f64]| {
+            o.iter_mut().enumerate().for_each(|(i, v)| *v = a[i] - b[i])
+        };
         diff(tau, model_tau.as_slice(), &mut out);
         statics[s].add(&out);
         s += 1;
         if let (Some(id), Some(d)) = (&ident, data_ident.as_mut()) {
-            let rigid = rnea(&id.model, d, q, qd, qdd).map_err(|e| CliError::input(e.to_string()))?;
+            let rigid =
+                rnea(&id.model, d, q, qd, qdd).map_err(|e| CliError::input(e.to_string()))?;
             diff(tau, rigid.as_slice(), &mut out);
             statics[s].add(&out);
             s += 1;
-            id.predict(d, q, qd, qdd, &mut est).map_err(|e| CliError::input(e.to_string()))?;
+            id.predict(d, q, qd, qdd, &mut est)
+                .map_err(|e| CliError::input(e.to_string()))?;
             diff(tau, &est, &mut out);
             statics[s].add(&out);
             s += 1;
             if let Some(r) = &residual {
                 let full = est.clone();
-                r.predict_into(&x, &mut est, &mut ws).map_err(|e| CliError::input(e.to_string()))?;
+                r.predict_into(&x, &mut est, &mut ws)
+                    .map_err(|e| CliError::input(e.to_string()))?;
                 for i in 0..n {
                     out[i] = tau[i] - full[i] - est[i];
                 }
@@ -154,13 +215,24 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             }
         }
         for (_, net) in &networks {
-            net.predict_into(&x, &mut est, &mut ws).map_err(|e| CliError::input(e.to_string()))?;
+            net.predict_into(&x, &mut est, &mut ws)
+                .map_err(|e| CliError::input(e.to_string()))?;
             diff(tau, &est, &mut out);
             statics[s].add(&out);
             s += 1;
         }
-        let dt = if k > 0 { data.t[k] - data.t[k - 1] } else { 0.01 };
-        let input = ObserverInput { time: data.t[k], q, qdot: qd, qddot: qdd, tau_commanded: tau };
+        let dt = if k > 0 {
+            data.t[k] - data.t[k - 1]
+        } else {
+            0.01
+        };
+        let input = ObserverInput {
+            time: data.t[k],
+            q,
+            qdot: qd,
+            qddot: qdd,
+            tau_commanded: tau,
+        };
         for (o, ((_, obs), score)) in observers.iter_mut().zip(dynamic.iter_mut()).enumerate() {
             if !matches!(obs.update(&input, dt, &mut est), StepStatus::Ok) {
                 faults[o] += 1;
@@ -169,7 +241,9 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         }
     }
     let count = (data.len() - first) as f64;
-    let var: Vec<f64> = (0..n).map(|i| (tau_sq[i] / count - (tau_sum[i] / count).powi(2)).max(1e-12)).collect();
+    let var: Vec<f64> = (0..n)
+        .map(|i| (tau_sq[i] / count - (tau_sum[i] / count).powi(2)).max(1e-12))
+        .collect();
     let mut text = format!(
         "{} rows of {} from t = {:.2} s ({:.1} s), no external force: every estimate is a false torque\n{:<34} {:>8} {:>7}  per joint rms (N m)\n",
         data.len() - first, args.data.display(), data.t[first], data.t[data.len() - 1] - data.t[first], "estimator", "rms N m", "nMSE"
@@ -178,15 +252,40 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
     for (k, score) in statics.iter().chain(dynamic.iter()).enumerate() {
         let c = score.count.max(1) as f64;
         let rms = (score.sq.iter().sum::<f64>() / (c * n as f64)).sqrt();
-        let nmse = score.sq.iter().zip(&var).map(|(s, v)| s / c / v).sum::<f64>() / n as f64;
+        let nmse = score
+            .sq
+            .iter()
+            .zip(&var)
+            .map(|(s, v)| s / c / v)
+            .sum::<f64>()
+            / n as f64;
         bad |= !rms.is_finite();
-        let joints: Vec<String> = score.sq.iter().map(|s| format!("{:.2}", (s / c).sqrt())).collect();
-        let fault = k.checked_sub(statics.len()).map_or(String::new(), |o| if faults[o] > 0 { format!("  ({} faults)", faults[o]) } else { String::new() });
-        text += &format!("{:<34} {:>8.3} {:>7.3}  {}{fault}\n", score.name, rms, nmse, joints.join(" "));
+        let joints: Vec<String> = score
+            .sq
+            .iter()
+            .map(|s| format!("{:.2}", (s / c).sqrt()))
+            .collect();
+        let fault = k.checked_sub(statics.len()).map_or(String::new(), |o| {
+            if faults[o] > 0 {
+                format!("  ({} faults)", faults[o])
+            } else {
+                String::new()
+            }
+        });
+        text += &format!(
+            "{:<34} {:>8.3} {:>7.3}  {}{fault}\n",
+            score.name,
+            rms,
+            nmse,
+            joints.join(" ")
+        );
     }
     crate::write_stdout(&text);
     if bad {
-        return Err(CliError { code: 1, message: "an estimate was not finite".into() });
+        return Err(CliError {
+            code: 1,
+            message: "an estimate was not finite".into(),
+        });
     }
     Ok(())
 }

@@ -62,27 +62,53 @@ impl Conditioned {
     pub fn new(path: &Path, data: &FreeMotionData, input_filter_hz: f64) -> Result<Self, CliError> {
         let n = data.dof();
         let (x, tau) = admittance_scenario::observer_training_arrays(data, input_filter_hz)
-            .map_err(|e| CliError::usage(format!("--input-filter-hz {input_filter_hz} with the data of {}: {e}", path.display())))?;
+            .map_err(|e| {
+                CliError::usage(format!(
+                    "--input-filter-hz {input_filter_hz} with the data of {}: {e}",
+                    path.display()
+                ))
+            })?;
         let (mut q, mut qdot, mut qddot) = (Vec::new(), Vec::new(), Vec::new());
         for row in x.chunks_exact(3 * n) {
             q.extend_from_slice(&row[..n]);
             qdot.extend_from_slice(&row[n..2 * n]);
             qddot.extend_from_slice(&row[2 * n..]);
         }
-        Ok(Conditioned { q, qdot, qddot, tau, dof: n })
+        Ok(Conditioned {
+            q,
+            qdot,
+            qddot,
+            tau,
+            dof: n,
+        })
     }
 
     pub fn samples(&self) -> Samples<'_> {
-        Samples { q: &self.q, qdot: &self.qdot, qddot: &self.qddot, tau: &self.tau, dof: self.dof }
+        Samples {
+            q: &self.q,
+            qdot: &self.qdot,
+            qddot: &self.qddot,
+            tau: &self.tau,
+            dof: self.dof,
+        }
     }
 }
 
 /// Rows with `t < until` (all without `until`); an error when that leaves too few.
-pub fn rows_until(path: &Path, data: &FreeMotionData, until: Option<f64>) -> Result<usize, CliError> {
-    let Some(until) = until else { return Ok(data.len()) };
+pub fn rows_until(
+    path: &Path,
+    data: &FreeMotionData,
+    until: Option<f64>,
+) -> Result<usize, CliError> {
+    let Some(until) = until else {
+        return Ok(data.len());
+    };
     let rows = data.t.iter().take_while(|t| **t < until).count();
     if rows < 20 {
-        return Err(CliError::usage(format!("--until {until}: only {rows} rows of {} are before it", path.display())));
+        return Err(CliError::usage(format!(
+            "--until {until}: only {rows} rows of {} are before it",
+            path.display()
+        )));
     }
     Ok(rows)
 }
@@ -90,22 +116,32 @@ pub fn rows_until(path: &Path, data: &FreeMotionData, until: Option<f64>) -> Res
 /// `--out` must be a new name or an identification file.
 fn check_out(path: &Path) -> Result<(), CliError> {
     if path.is_dir() {
-        return Err(CliError::usage(format!("--out {}: is a folder; give a file name", path.display())));
+        return Err(CliError::usage(format!(
+            "--out {}: is a folder; give a file name",
+            path.display()
+        )));
     }
     if path.exists() && Identification::load_with_urdf(path).is_err() && !is_identification(path) {
-        return Err(CliError::usage(format!("--out {}: exists and is not an identification file; choose another name", path.display())));
+        return Err(CliError::usage(format!(
+            "--out {}: exists and is not an identification file; choose another name",
+            path.display()
+        )));
     }
     Ok(())
 }
 
 fn is_identification(path: &Path) -> bool {
-    std::fs::read_to_string(path).is_ok_and(|t| t.contains("\"format\": \"admittance-identification\""))
+    std::fs::read_to_string(path)
+        .is_ok_and(|t| t.contains("\"format\": \"admittance-identification\""))
 }
 
 pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     check_out(&args.out)?;
     if !(2..=50).contains(&args.folds) {
-        return Err(CliError::usage(format!("--folds {}: must be 2 to 50", args.folds)));
+        return Err(CliError::usage(format!(
+            "--folds {}: must be 2 to 50",
+            args.folds
+        )));
     }
     let arm = crate::dynamics_cmd::load(&args.chain)?;
     let joints: Vec<String> = arm.joint_names().map(String::from).collect();
@@ -113,7 +149,11 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     let rows = rows_until(&args.data, &data, args.until)?;
     let train = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
     let validation = match &args.validation {
-        Some(p) => Some(Conditioned::new(p, &crate::train_cmd::load_data(p, Some(&joints))?, args.input_filter_hz)?),
+        Some(p) => Some(Conditioned::new(
+            p,
+            &crate::train_cmd::load_data(p, Some(&joints))?,
+            args.input_filter_hz,
+        )?),
         None => None,
     };
     let settings = IdentificationSettings {
@@ -125,16 +165,34 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     };
     let samples = train.samples().slice(0, rows);
     let started = std::time::Instant::now();
-    let ident = identify(&arm, &samples, validation.as_ref().map(|v| v.samples()).as_ref(), &settings)
-        .map_err(|e| CliError::input(format!("{}: {e}", args.data.display())))?;
+    let ident = identify(
+        &arm,
+        &samples,
+        validation.as_ref().map(|v| v.samples()).as_ref(),
+        &settings,
+    )
+    .map_err(|e| CliError::input(format!("{}: {e}", args.data.display())))?;
     let mut provenance = BTreeMap::new();
     provenance.insert("data".into(), json!(args.data.display().to_string()));
     provenance.insert("rows".into(), json!(rows));
     provenance.insert("until_s".into(), json!(args.until));
-    provenance.insert("validation".into(), json!(args.validation.as_ref().map(|p| p.display().to_string())));
+    provenance.insert(
+        "validation".into(),
+        json!(args.validation.as_ref().map(|p| p.display().to_string())),
+    );
     provenance.insert("input_filter_hz".into(), json!(args.input_filter_hz));
-    ident.save(&args.out, &arm, provenance).map_err(|e| CliError { code: 1, message: e.to_string() })?;
-    crate::write_stdout(&report(&arm, &ident, started.elapsed().as_secs_f64(), &args.out));
+    ident
+        .save(&args.out, &arm, provenance)
+        .map_err(|e| CliError {
+            code: 1,
+            message: e.to_string(),
+        })?;
+    crate::write_stdout(&report(
+        &arm,
+        &ident,
+        started.elapsed().as_secs_f64(),
+        &args.out,
+    ));
     Ok(())
 }
 

@@ -18,8 +18,8 @@
 mod dynamics_cmd;
 mod evaluate_cmd;
 mod identify_cmd;
-mod interrupt;
 mod import_cmd;
+mod interrupt;
 mod list_cmd;
 mod progress;
 mod report_cmd;

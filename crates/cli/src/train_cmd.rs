@@ -27,8 +27,8 @@ use clap::Args;
 use crate::progress::{self, Spinner};
 use crate::CliError;
 use args::{
-    arm_identity, check_out, learn_error, open_fraction, positive_count,
-    BudgetArgs, OptionalArmArgs,
+    arm_identity, check_out, learn_error, open_fraction, positive_count, BudgetArgs,
+    OptionalArmArgs,
 };
 
 #[derive(Args)]

@@ -46,7 +46,11 @@ fn regressor_equals_pinocchio_on_every_fixture_arm() {
             .unwrap_or_else(|e| panic!("{e}"));
         let ours = inertial_parameters(&model);
         for (a, b) in ours.iter().zip(&fx.parameters) {
-            assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{}: parameters {a} vs {b}", path.display());
+            assert!(
+                (a - b).abs() <= 1e-12 * (1.0 + b.abs()),
+                "{}: parameters {a} vs {b}",
+                path.display()
+            );
         }
         let mut data = Data::new(&model);
         for case in &fx.cases {
@@ -57,7 +61,10 @@ fn regressor_equals_pinocchio_on_every_fixture_arm() {
             assert!(err <= 1e-10, "{}: relative error {err:e}", path.display());
         }
     }
-    eprintln!("regressor vs Pinocchio: {} files, worst relative error {worst:e}", paths.len());
+    eprintln!(
+        "regressor vs Pinocchio: {} files, worst relative error {worst:e}",
+        paths.len()
+    );
 }
 
 #[test]
@@ -74,7 +81,11 @@ fn regressor_times_parameters_is_rnea() {
             let tau = rnea(&model, &mut data, &q, &v, &a).unwrap().clone();
             let y = joint_torque_regressor(&model, &mut data, &q, &v, &a).unwrap();
             let err = (y * &pi - &tau).norm();
-            assert!(err <= 1e-10 * (1.0 + tau.norm()), "{}: {err:e}", model.robot_name);
+            assert!(
+                err <= 1e-10 * (1.0 + tau.norm()),
+                "{}: {err:e}",
+                model.robot_name
+            );
         }
     }
 }
@@ -105,7 +116,9 @@ fn base_parameters_of_baxter() {
     let q = [0.3, -0.2, 0.5, 1.0, -0.4, 0.8, 0.2];
     let v = [0.5, -0.3, 0.2, 0.4, -0.6, 0.1, 0.9];
     let a = [1.0, 0.5, -0.5, 0.2, 0.3, -0.1, 0.7];
-    let y = joint_torque_regressor(&model, &mut data, &q, &v, &a).unwrap().clone();
+    let y = joint_torque_regressor(&model, &mut data, &q, &v, &a)
+        .unwrap()
+        .clone();
     let pi = nalgebra::DVector::from_vec(inertial_parameters(&model));
     let pb = base.base_values(pi.as_slice());
     let yb = DMatrix::from_fn(7, r, |i, j| y[(i, base.independent()[j])]);

@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use admittance_dynamics::{identify as rust_identify, Data, Identification, IdentificationSettings, Model, Samples};
+use admittance_dynamics::{
+    identify as rust_identify, Data, Identification, IdentificationSettings, Model, Samples,
+};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
@@ -42,18 +44,37 @@ impl Columns {
             qdot.extend_from_slice(&row[n..2 * n]);
             qddot.extend_from_slice(&row[2 * n..]);
         }
-        Columns { q, qdot, qddot, tau, n }
+        Columns {
+            q,
+            qdot,
+            qddot,
+            tau,
+            n,
+        }
     }
     fn samples(&self) -> Samples<'_> {
-        Samples { q: &self.q, qdot: &self.qdot, qddot: &self.qddot, tau: &self.tau, dof: self.n }
+        Samples {
+            q: &self.q,
+            qdot: &self.qdot,
+            qddot: &self.qddot,
+            tau: &self.tau,
+            dof: self.n,
+        }
     }
 }
 
-fn columns(py: Python<'_>, data: &Bound<'_, PyAny>, arg: &str, model: &Model, input_filter_hz: f64) -> PyResult<Columns> {
+fn columns(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    arg: &str,
+    model: &Model,
+    input_filter_hz: f64,
+) -> PyResult<Columns> {
     let n = model.nq();
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
     let data = data_arg(data, arg, n, Some(&joints))?;
-    let (x, y, _) = py.detach(|| training_arrays(data, arg, n, Some(&joints), input_filter_hz, None))?;
+    let (x, y, _) =
+        py.detach(|| training_arrays(data, arg, n, Some(&joints), input_filter_hz, None))?;
     Ok(Columns::new(&x, y, n))
 }
 
@@ -80,54 +101,93 @@ pub fn identify(
         Some(v) => Some(columns(py, v, "validation", &urdf, input_filter_hz)?),
         None => None,
     };
-    let settings = IdentificationSettings { friction, springs: friction && springs, ..Default::default() };
+    let settings = IdentificationSettings {
+        friction,
+        springs: friction && springs,
+        ..Default::default()
+    };
     let ident = py
-        .detach(|| rust_identify(&urdf, &train.samples(), validation.as_ref().map(|v| v.samples()).as_ref(), &settings))
+        .detach(|| {
+            rust_identify(
+                &urdf,
+                &train.samples(),
+                validation.as_ref().map(|v| v.samples()).as_ref(),
+                &settings,
+            )
+        })
         .map_err(|e| value_error(e.to_string()))?;
-    Ok(PyIdentification { identification: Arc::new(ident), urdf })
+    Ok(PyIdentification {
+        identification: Arc::new(ident),
+        urdf,
+    })
 }
 
 /// Reads an identification file (`Identification.save`, `admittance identify`) with the URDF
 /// it names; with `m`, applies it to that model instead (which must be the arm it was made for).
 #[pyfunction]
 #[pyo3(signature = (path, m=None))]
-pub fn load_identification(path: PathBuf, m: Option<&Bound<'_, PyModel>>) -> PyResult<PyIdentification> {
+pub fn load_identification(
+    path: PathBuf,
+    m: Option<&Bound<'_, PyModel>>,
+) -> PyResult<PyIdentification> {
     let (ident, urdf) = match m {
         Some(m) => {
             let urdf = m.get().model.clone();
-            (Identification::load(&path, &urdf).map_err(|e| value_error(e.to_string()))?, urdf)
+            (
+                Identification::load(&path, &urdf).map_err(|e| value_error(e.to_string()))?,
+                urdf,
+            )
         }
         None => {
-            let (i, model) = Identification::load_with_urdf(&path).map_err(|e| value_error(e.to_string()))?;
+            let (i, model) =
+                Identification::load_with_urdf(&path).map_err(|e| value_error(e.to_string()))?;
             (i, Arc::new(model))
         }
     };
-    Ok(PyIdentification { identification: Arc::new(ident), urdf })
+    Ok(PyIdentification {
+        identification: Arc::new(ident),
+        urdf,
+    })
 }
 
 #[pymethods]
 impl PyIdentification {
     /// The torque (N m) the identified arm needs: `(n,)` for one state, `(N, n)` for rows.
-    fn predict<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>, qdot: &Bound<'py, PyAny>, qddot: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        qdot: &Bound<'py, PyAny>,
+        qddot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let n = self.identification.model.nq();
         let (q, rq, single) = rows(q, "q", n, true)?;
         let (qd, rqd, _) = rows(qdot, "qdot", n, true)?;
         let (qdd, rqdd, _) = rows(qddot, "qddot", n, true)?;
         if rq != rqd || rq != rqdd {
-            return Err(value_error(format!("`q`, `qdot` and `qddot` have {rq}, {rqd} and {rqdd} rows")));
+            return Err(value_error(format!(
+                "`q`, `qdot` and `qddot` have {rq}, {rqd} and {rqdd} rows"
+            )));
         }
         let mut data = Data::new(&self.identification.model);
         let mut out = vec![0.0; rq * n];
         for k in 0..rq {
             let r = k * n..(k + 1) * n;
             self.identification
-                .predict(&mut data, &q[r.clone()], &qd[r.clone()], &qdd[r.clone()], &mut out[r])
+                .predict(
+                    &mut data,
+                    &q[r.clone()],
+                    &qd[r.clone()],
+                    &qdd[r.clone()],
+                    &mut out[r],
+                )
                 .map_err(|e| value_error(e.to_string()))?;
         }
         if single {
             return Ok(vector_out(py, &out, None, "out")?.into_any());
         }
-        let a = numpy::ndarray::Array2::from_shape_vec((rq, n), out).map_err(|e| value_error(e.to_string()))?;
+        let a = numpy::ndarray::Array2::from_shape_vec((rq, n), out)
+            .map_err(|e| value_error(e.to_string()))?;
         Ok(PyArray2::from_owned_array(py, a).into_any())
     }
 
@@ -141,13 +201,21 @@ impl PyIdentification {
     /// offset, spring).
     #[getter]
     fn joint_terms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &serde_json::to_value(&self.identification.joint_terms).map_err(|e| value_error(e.to_string()))?)
+        json_to_py(
+            py,
+            &serde_json::to_value(&self.identification.joint_terms)
+                .map_err(|e| value_error(e.to_string()))?,
+        )
     }
 
     /// What was chosen and measured (held-out rms per joint in N m, ridge, springs, ...).
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &serde_json::to_value(&self.identification.summary).map_err(|e| value_error(e.to_string()))?)
+        json_to_py(
+            py,
+            &serde_json::to_value(&self.identification.summary)
+                .map_err(|e| value_error(e.to_string()))?,
+        )
     }
 
     /// Writes the identification file (JSON, versioned, checksummed, atomic); an existing
@@ -155,14 +223,30 @@ impl PyIdentification {
     #[pyo3(signature = (path, data=None))]
     fn save(&self, path: PathBuf, data: Option<String>) -> PyResult<()> {
         let mut provenance = BTreeMap::new();
-        provenance.insert("data".to_string(), serde_json::Value::from(data.unwrap_or_else(|| "from Python".into())));
-        self.identification.save(&path, &self.urdf, provenance).map_err(|e| value_error(e.to_string()))
+        provenance.insert(
+            "data".to_string(),
+            serde_json::Value::from(data.unwrap_or_else(|| "from Python".into())),
+        );
+        self.identification
+            .save(&path, &self.urdf, provenance)
+            .map_err(|e| value_error(e.to_string()))
     }
 
     fn __repr__(&self) -> String {
         let s = &self.identification.summary;
-        let total = (s.expected_false_torque_rms.iter().map(|x| x * x).sum::<f64>() / s.expected_false_torque_rms.len().max(1) as f64).sqrt();
-        format!("Identification({} joints, expected false torque {:.3} N m rms, held out: {})", self.identification.model.nq(), total, s.held_out)
+        let total = (s
+            .expected_false_torque_rms
+            .iter()
+            .map(|x| x * x)
+            .sum::<f64>()
+            / s.expected_false_torque_rms.len().max(1) as f64)
+            .sqrt();
+        format!(
+            "Identification({} joints, expected false torque {:.3} N m rms, held out: {})",
+            self.identification.model.nq(),
+            total,
+            s.held_out
+        )
     }
 }
 
@@ -177,7 +261,11 @@ pub(crate) fn nominal_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Arc<Id
         return Ok(i.get().identification.clone());
     }
     if let Ok(m) = obj.cast::<PyModel>() {
-        return Ok(Arc::new(Identification::from_model(m.get().model.as_ref().clone())));
+        return Ok(Arc::new(Identification::from_model(
+            m.get().model.as_ref().clone(),
+        )));
     }
-    Err(pyo3::exceptions::PyTypeError::new_err(format!("`{name}` must be a Model or an Identification")))
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "`{name}` must be a Model or an Identification"
+    )))
 }

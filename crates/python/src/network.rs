@@ -199,7 +199,9 @@ pub(crate) fn training_arrays(
     if let Some(nominal) = nominal {
         // What the nominal model (a URDF model, or an identification with its joint terms)
         // misses: the hybrid observer's residual network.
-        nominal.subtract_from(&x, &mut y).map_err(|e| value_error(format!("`nominal`: {e}")))?;
+        nominal
+            .subtract_from(&x, &mut y)
+            .map_err(|e| value_error(format!("`nominal`: {e}")))?;
     }
     Ok((x, y, data.len()))
 }

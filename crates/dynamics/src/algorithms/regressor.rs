@@ -52,16 +52,27 @@ impl Inertia {
 /// The model's inertial parameters stacked body after body (length `10 n`), so that
 /// `rnea(q, q', q'') == joint_torque_regressor(q, q', q'') * parameters`.
 pub fn inertial_parameters(model: &Model) -> Vec<f64> {
-    model.bodies.iter().flat_map(|b| b.to_parameters()).collect()
+    model
+        .bodies
+        .iter()
+        .flat_map(|b| b.to_parameters())
+        .collect()
 }
 
 /// A copy of `model` with its bodies' inertial parameters replaced by `parameters`
 /// (length `10 n`, the order of [`inertial_parameters`]). Kinematics, limits and frames
 /// are kept.
-pub fn with_inertial_parameters(model: &Model, parameters: &[f64]) -> Result<Model, DimensionError> {
+pub fn with_inertial_parameters(
+    model: &Model,
+    parameters: &[f64],
+) -> Result<Model, DimensionError> {
     check_len("parameters", parameters, PARAMETERS_PER_BODY * model.nq())?;
     let mut out = model.clone();
-    for (body, p) in out.bodies.iter_mut().zip(parameters.chunks_exact(PARAMETERS_PER_BODY)) {
+    for (body, p) in out
+        .bodies
+        .iter_mut()
+        .zip(parameters.chunks_exact(PARAMETERS_PER_BODY))
+    {
         let mut fixed = [0.0; PARAMETERS_PER_BODY];
         fixed.copy_from_slice(p);
         *body = Inertia::from_parameters(&fixed);

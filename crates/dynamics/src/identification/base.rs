@@ -30,7 +30,9 @@ impl BaseParameters {
     pub fn new(model: &Model, samples: usize, seed: u64) -> Result<Self, DynamicsError> {
         let n = model.nq();
         if samples == 0 || n == 0 {
-            return Err(DynamicsError::InvalidArgument("base parameters need at least one sample and one joint".into()));
+            return Err(DynamicsError::InvalidArgument(
+                "base parameters need at least one sample and one joint".into(),
+            ));
         }
         let mut rng = SplitMix(seed);
         let mut data = Data::new(model);
@@ -39,8 +41,16 @@ impl BaseParameters {
         for s in 0..samples {
             for (i, joint) in model.joints.iter().enumerate() {
                 let l = &joint.limits;
-                let (lo, hi) = if l.lower.is_finite() && l.upper.is_finite() { (l.lower, l.upper) } else { (-std::f64::consts::PI, std::f64::consts::PI) };
-                let vmax = if l.velocity.is_finite() { l.velocity.min(2.0) } else { 2.0 };
+                let (lo, hi) = if l.lower.is_finite() && l.upper.is_finite() {
+                    (l.lower, l.upper)
+                } else {
+                    (-std::f64::consts::PI, std::f64::consts::PI)
+                };
+                let vmax = if l.velocity.is_finite() {
+                    l.velocity.min(2.0)
+                } else {
+                    2.0
+                };
                 q[i] = lo + (hi - lo) * rng.unit();
                 v[i] = vmax * (2.0 * rng.unit() - 1.0);
                 a[i] = 5.0 * (2.0 * rng.unit() - 1.0);
@@ -55,7 +65,9 @@ impl BaseParameters {
     /// when their part outside the span of the columns kept before them is more than
     /// 1e-8 of their norm (Gram-Schmidt, twice for accuracy).
     pub fn from_regressor(stacked: &DMatrix<f64>) -> Self {
-        let largest = (0..stacked.ncols()).map(|c| stacked.column(c).norm()).fold(0.0, f64::max);
+        let largest = (0..stacked.ncols())
+            .map(|c| stacked.column(c).norm())
+            .fold(0.0, f64::max);
         let mut basis: Vec<DVector<f64>> = Vec::new();
         let (mut independent, mut dependent) = (Vec::new(), Vec::new());
         for c in 0..stacked.ncols() {
@@ -83,9 +95,15 @@ impl BaseParameters {
         } else {
             let gram = yi.transpose() * &yi;
             let rhs = yi.transpose() * yd;
-            gram.cholesky().map(|c| c.solve(&rhs)).unwrap_or_else(|| DMatrix::zeros(independent.len(), dependent.len()))
+            gram.cholesky()
+                .map(|c| c.solve(&rhs))
+                .unwrap_or_else(|| DMatrix::zeros(independent.len(), dependent.len()))
         };
-        BaseParameters { independent, dependent, beta }
+        BaseParameters {
+            independent,
+            dependent,
+            beta,
+        }
     }
 
     /// Number of base parameters (the regressor's numerical rank).
@@ -105,8 +123,14 @@ impl BaseParameters {
 
     /// The base parameter values of a full parameter vector: `pi_b = pi_i + beta pi_d`.
     pub fn base_values(&self, parameters: &[f64]) -> DVector<f64> {
-        let pi_i = DVector::from_iterator(self.independent.len(), self.independent.iter().map(|&c| parameters[c]));
-        let pi_d = DVector::from_iterator(self.dependent.len(), self.dependent.iter().map(|&c| parameters[c]));
+        let pi_i = DVector::from_iterator(
+            self.independent.len(),
+            self.independent.iter().map(|&c| parameters[c]),
+        );
+        let pi_d = DVector::from_iterator(
+            self.dependent.len(),
+            self.dependent.iter().map(|&c| parameters[c]),
+        );
         pi_i + &self.beta * pi_d
     }
 
@@ -122,8 +146,14 @@ impl BaseParameters {
             }
         }
         let sv = yb.singular_values();
-        let (max, min) = sv.iter().fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
-        if min > 0.0 { max / min } else { f64::INFINITY }
+        let (max, min) = sv
+            .iter()
+            .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
+        if min > 0.0 {
+            max / min
+        } else {
+            f64::INFINITY
+        }
     }
 }
 

@@ -24,7 +24,8 @@ fn pseudo_inertia(b: &Inertia) -> Matrix4<f64> {
     let mut j = Matrix4::zeros();
     j.fixed_view_mut::<3, 3>(0, 0).copy_from(&sigma);
     j.fixed_view_mut::<3, 1>(0, 3).copy_from(&b.first_moment);
-    j.fixed_view_mut::<1, 3>(3, 0).copy_from(&b.first_moment.transpose());
+    j.fixed_view_mut::<1, 3>(3, 0)
+        .copy_from(&b.first_moment.transpose());
     j[(3, 3)] = b.mass;
     j
 }
@@ -49,11 +50,14 @@ pub fn is_physically_consistent(b: &Inertia) -> bool {
 /// The nearest physically possible body (in the pseudo-inertia's Frobenius norm): its
 /// eigenvalues raised to the floor (1e-6 of the largest, and at least `at_least`). `None` when nothing positive is left to keep (the fit
 /// gave a body with no positive mass distribution at all).
-pub(crate) fn project(p: &[f64; PARAMETERS_PER_BODY], at_least: f64) -> Option<[f64; PARAMETERS_PER_BODY]> {
+pub(crate) fn project(
+    p: &[f64; PARAMETERS_PER_BODY],
+    at_least: f64,
+) -> Option<[f64; PARAMETERS_PER_BODY]> {
     let j = pseudo_inertia(&Inertia::from_parameters(p));
     let eig = j.symmetric_eigen();
     let max = eig.eigenvalues.max();
-    if !(max > 0.0) {
+    if max.is_nan() || max <= 0.0 {
         return None;
     }
     let floor = (MIN_RELATIVE_EIGENVALUE * max).max(at_least);
@@ -69,31 +73,64 @@ pub(crate) fn project(p: &[f64; PARAMETERS_PER_BODY], at_least: f64) -> Option<[
 /// pseudo-inertia is `J = U U^T` with `U` upper triangular, and `theta = [ln U_00, ln U_11,
 /// ln U_22, ln U_33, U_01, U_02, U_03, U_12, U_13, U_23]`. Every `theta` maps to a
 /// physically possible body, so a fit over `theta` cannot leave the set.
-pub(crate) fn to_log_cholesky(p: &[f64; PARAMETERS_PER_BODY], margin: f64) -> Option<[f64; PARAMETERS_PER_BODY]> {
-    let j = pseudo_inertia(&Inertia::from_parameters(&project(p, 2.0 * margin)?)) - Matrix4::identity() * margin;
+pub(crate) fn to_log_cholesky(
+    p: &[f64; PARAMETERS_PER_BODY],
+    margin: f64,
+) -> Option<[f64; PARAMETERS_PER_BODY]> {
+    let j = pseudo_inertia(&Inertia::from_parameters(&project(p, 2.0 * margin)?))
+        - Matrix4::identity() * margin;
     // J = U U^T with U upper triangular is the ordinary Cholesky factor of the
     // index-reversed matrix, reversed back.
     let rev = |m: &Matrix4<f64>| Matrix4::from_fn(|r, c| m[(3 - r, 3 - c)]);
     let l = rev(&j).cholesky()?.l();
     let u = rev(&l);
-    Some([u[(0, 0)].ln(), u[(1, 1)].ln(), u[(2, 2)].ln(), u[(3, 3)].ln(), u[(0, 1)], u[(0, 2)], u[(0, 3)], u[(1, 2)], u[(1, 3)], u[(2, 3)]])
+    Some([
+        u[(0, 0)].ln(),
+        u[(1, 1)].ln(),
+        u[(2, 2)].ln(),
+        u[(3, 3)].ln(),
+        u[(0, 1)],
+        u[(0, 2)],
+        u[(0, 3)],
+        u[(1, 2)],
+        u[(1, 3)],
+        u[(2, 3)],
+    ])
 }
 
 /// The margin of a body: its pseudo-inertia is kept at least this far from singular
 /// (1e-6 of the prior body's largest eigenvalue), so a fit the data barely constrain cannot
 /// end on a flat or massless body.
 pub(crate) fn margin(prior: &[f64; PARAMETERS_PER_BODY]) -> f64 {
-    1e-6 * pseudo_inertia(&Inertia::from_parameters(prior)).symmetric_eigenvalues().max().max(0.0)
+    1e-6 * pseudo_inertia(&Inertia::from_parameters(prior))
+        .symmetric_eigenvalues()
+        .max()
+        .max(0.0)
 }
 
 /// The inertial parameters of log-Cholesky coordinates (see [`to_log_cholesky`]), the
 /// pseudo-inertia being `U U^T + margin * 1`.
-pub(crate) fn from_log_cholesky(t: &[f64; PARAMETERS_PER_BODY], margin: f64) -> [f64; PARAMETERS_PER_BODY] {
+pub(crate) fn from_log_cholesky(
+    t: &[f64; PARAMETERS_PER_BODY],
+    margin: f64,
+) -> [f64; PARAMETERS_PER_BODY] {
     let u = Matrix4::new(
-        t[0].exp(), t[4], t[5], t[6],
-        0.0, t[1].exp(), t[7], t[8],
-        0.0, 0.0, t[2].exp(), t[9],
-        0.0, 0.0, 0.0, t[3].exp(),
+        t[0].exp(),
+        t[4],
+        t[5],
+        t[6],
+        0.0,
+        t[1].exp(),
+        t[7],
+        t[8],
+        0.0,
+        0.0,
+        t[2].exp(),
+        t[9],
+        0.0,
+        0.0,
+        0.0,
+        t[3].exp(),
     );
     from_pseudo_inertia(&(u * u.transpose() + Matrix4::identity() * margin)).to_parameters()
 }

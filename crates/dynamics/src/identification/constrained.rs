@@ -21,7 +21,12 @@ struct Quadratic {
 }
 
 impl Quadratic {
-    fn new(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> (Self, Vec<usize>) {
+    fn new(
+        normal: &Normal,
+        active: &[bool],
+        prior: &DVector<f64>,
+        ridge: f64,
+    ) -> (Self, Vec<usize>) {
         let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
         let scales = column_scales(normal, active);
         let m = idx.len();
@@ -37,7 +42,14 @@ impl Quadratic {
             a[(r, r)] += d;
             c[r] += d * prior[cr];
         }
-        (Quadratic { a, c, yy: normal.yy }, idx)
+        (
+            Quadratic {
+                a,
+                c,
+                yy: normal.yy,
+            },
+            idx,
+        )
     }
 
     fn cost(&self, x: &DVector<f64>) -> f64 {
@@ -62,12 +74,14 @@ impl Coordinates {
             if let Some((s, eps)) = *slot {
                 let mut t = [0.0; PARAMETERS_PER_BODY];
                 t.copy_from_slice(&z.as_slice()[s..s + PARAMETERS_PER_BODY]);
-                x.rows_mut(b * PARAMETERS_PER_BODY, PARAMETERS_PER_BODY).copy_from_slice(&from_log_cholesky(&t, eps));
+                x.rows_mut(b * PARAMETERS_PER_BODY, PARAMETERS_PER_BODY)
+                    .copy_from_slice(&from_log_cholesky(&t, eps));
             }
         }
         let joints = x.len() - self.first_joint;
         let start = z.len() - joints;
-        x.rows_mut(self.first_joint, joints).copy_from(&z.rows(start, joints));
+        x.rows_mut(self.first_joint, joints)
+            .copy_from(&z.rows(start, joints));
         x
     }
 
@@ -100,22 +114,33 @@ impl Coordinates {
 /// The minimiser over physically possible bodies, started from the prior (whose bodies
 /// are physically possible, or projected onto that set first). Returns the full solution
 /// vector (inactive columns at the prior).
-pub(crate) fn solve_consistent(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64, bodies: usize) -> Option<DVector<f64>> {
+pub(crate) fn solve_consistent(
+    normal: &Normal,
+    active: &[bool],
+    prior: &DVector<f64>,
+    ridge: f64,
+    bodies: usize,
+) -> Option<DVector<f64>> {
     let (quad, idx) = Quadratic::new(normal, active, prior, ridge);
     let inertial = bodies * PARAMETERS_PER_BODY;
     // Two starts: the prior, and the unconstrained solution with its bodies projected onto
     // the possible ones (near the optimum when the data agree with physics).
     let from_prior: DVector<f64> = DVector::from_fn(idx.len(), |r, _| prior[idx[r]]);
     let mut best: Option<(f64, Coordinates, DVector<f64>)> = None;
-    let free = crate::identification::normal::solve(normal, active, prior, ridge).map(|x| DVector::from_fn(idx.len(), |r, _| x[idx[r]]));
+    let free = crate::identification::normal::solve(normal, active, prior, ridge)
+        .map(|x| DVector::from_fn(idx.len(), |r, _| x[idx[r]]));
     for start in [Some(from_prior.clone()), free].into_iter().flatten() {
         let mut slots = Vec::with_capacity(bodies);
         let mut z0 = Vec::new();
         for b in 0..bodies {
             let mut p = [0.0; PARAMETERS_PER_BODY];
-            p.copy_from_slice(&start.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+            p.copy_from_slice(
+                &start.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
+            );
             let mut prior_body = [0.0; PARAMETERS_PER_BODY];
-            prior_body.copy_from_slice(&from_prior.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+            prior_body.copy_from_slice(
+                &from_prior.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
+            );
             // A body the prior cannot place (massless) stays at the prior.
             let eps = margin(&prior_body);
             match to_log_cholesky(&prior_body, eps).and(to_log_cholesky(&p, eps)) {
@@ -127,7 +152,12 @@ pub(crate) fn solve_consistent(normal: &Normal, active: &[bool], prior: &DVector
             }
         }
         z0.extend_from_slice(&start.as_slice()[inertial..]);
-        let coords = Coordinates { bodies: slots, z: DVector::from_vec(z0), first_joint: inertial, len: idx.len() };
+        let coords = Coordinates {
+            bodies: slots,
+            z: DVector::from_vec(z0),
+            first_joint: inertial,
+            len: idx.len(),
+        };
         let cost = quad.cost(&coords.to_x(&coords.z, &from_prior));
         if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.0) {
             best = Some((cost, coords, from_prior.clone()));

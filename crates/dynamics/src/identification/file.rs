@@ -63,7 +63,9 @@ impl Identification {
     /// The file contents for this identification of `urdf_model` (the model it was
     /// identified from), with `data` describing the recordings.
     pub fn to_file(&self, urdf_model: &Model, data: BTreeMap<String, Value>) -> IdentificationFile {
-        let urdf = std::fs::canonicalize(&urdf_model.source).map(|p| p.display().to_string()).unwrap_or_else(|_| urdf_model.source.clone());
+        let urdf = std::fs::canonicalize(&urdf_model.source)
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|_| urdf_model.source.clone());
         IdentificationFile {
             urdf,
             base: urdf_model.base_link.clone(),
@@ -80,11 +82,20 @@ impl Identification {
 
     /// Writes the identification atomically (a temporary file renamed into place). An
     /// existing file at `path` is replaced only when it is an identification file.
-    pub fn save(&self, path: &Path, urdf_model: &Model, data: BTreeMap<String, Value>) -> Result<(), DynamicsError> {
+    pub fn save(
+        &self,
+        path: &Path,
+        urdf_model: &Model,
+        data: BTreeMap<String, Value>,
+    ) -> Result<(), DynamicsError> {
         if path.exists() && read_envelope(path).is_err() {
-            return Err(err(path, "exists and is not an identification file: not overwritten (choose another --out)"));
+            return Err(err(
+                path,
+                "exists and is not an identification file: not overwritten (choose another --out)",
+            ));
         }
-        let payload = serde_json::to_value(self.to_file(urdf_model, data)).map_err(|e| err(path, e))?;
+        let payload =
+            serde_json::to_value(self.to_file(urdf_model, data)).map_err(|e| err(path, e))?;
         let envelope = serde_json::json!({
             "format": IDENTIFICATION_FORMAT,
             "format_version": IDENTIFICATION_FORMAT_VERSION,
@@ -92,12 +103,24 @@ impl Identification {
             "payload": payload,
         });
         let text = serde_json::to_string_pretty(&envelope).map_err(|e| err(path, e))? + "\n";
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        let tmp: PathBuf = dir.join(format!(".{}.tmp{}", path.file_name().and_then(|s| s.to_str()).unwrap_or("identification"), std::process::id()));
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let tmp: PathBuf = dir.join(format!(
+            ".{}.tmp{}",
+            path.file_name()
+                .and_then(|s| s.to_str())
+                .unwrap_or("identification"),
+            std::process::id()
+        ));
         std::fs::write(&tmp, text).map_err(|e| err(&tmp, format!("cannot write: {e}")))?;
         std::fs::rename(&tmp, path).map_err(|e| {
             let _ = std::fs::remove_file(&tmp);
-            err(path, format!("cannot move the written file into place: {e}"))
+            err(
+                path,
+                format!("cannot move the written file into place: {e}"),
+            )
         })
     }
 
@@ -120,42 +143,87 @@ impl Identification {
     pub fn load_with_urdf(path: &Path) -> Result<(Identification, Model), DynamicsError> {
         let file = read_file(path)?;
         let stated = PathBuf::from(&file.urdf);
-        let beside = path.parent().map(|d| d.join(&stated)).filter(|p| stated.is_relative() && p.exists());
+        let beside = path
+            .parent()
+            .map(|d| d.join(&stated))
+            .filter(|p| stated.is_relative() && p.exists());
         let urdf_path = beside.unwrap_or(stated);
-        let model = Model::from_urdf_file(&urdf_path, Some(&file.base), Some(&file.tip))
-            .map_err(|e| err(path, format!("names the URDF {}, which does not load: {e}", urdf_path.display())))?;
+        let model =
+            Model::from_urdf_file(&urdf_path, Some(&file.base), Some(&file.tip)).map_err(|e| {
+                err(
+                    path,
+                    format!(
+                        "names the URDF {}, which does not load: {e}",
+                        urdf_path.display()
+                    ),
+                )
+            })?;
         Ok((Self::load(path, &model)?, model))
     }
 
-    fn from_file(path: &Path, file: &IdentificationFile, urdf_model: &Model) -> Result<Identification, DynamicsError> {
+    fn from_file(
+        path: &Path,
+        file: &IdentificationFile,
+        urdf_model: &Model,
+    ) -> Result<Identification, DynamicsError> {
         let n = urdf_model.nq();
         if file.joint_terms.len() != n || file.inertial_parameters.len() != 10 * n {
             return Err(err(path, format!("holds {} joint terms and {} parameters for an arm of {n} joints: the file is damaged", file.joint_terms.len(), file.inertial_parameters.len())));
         }
         if let Some(i) = file.joint_terms.iter().position(|t| !t.is_valid()) {
-            return Err(err(path, format!("joint_terms[{i}] holds a non-finite value or a non-positive coulomb_width")));
+            return Err(err(
+                path,
+                format!(
+                    "joint_terms[{i}] holds a non-finite value or a non-positive coulomb_width"
+                ),
+            ));
         }
         if let Some(i) = file.inertial_parameters.iter().position(|v| !v.is_finite()) {
-            return Err(err(path, format!("inertial_parameters[{i}] is not a finite number")));
+            return Err(err(
+                path,
+                format!("inertial_parameters[{i}] is not a finite number"),
+            ));
         }
-        let model = crate::algorithms::regressor::with_inertial_parameters(urdf_model, &file.inertial_parameters)?;
-        Ok(Identification { model, joint_terms: file.joint_terms.clone(), summary: file.summary.clone() })
+        let model = crate::algorithms::regressor::with_inertial_parameters(
+            urdf_model,
+            &file.inertial_parameters,
+        )?;
+        Ok(Identification {
+            model,
+            joint_terms: file.joint_terms.clone(),
+            summary: file.summary.clone(),
+        })
     }
 }
 
 /// The checked envelope's payload.
 fn read_envelope(path: &Path) -> Result<Value, DynamicsError> {
     let text = std::fs::read_to_string(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
-    let mut v: Value = serde_json::from_str(&text).map_err(|e| err(path, format!("is not an identification file (not JSON: {e})")))?;
+    let mut v: Value = serde_json::from_str(&text).map_err(|e| {
+        err(
+            path,
+            format!("is not an identification file (not JSON: {e})"),
+        )
+    })?;
     if v.get("format").and_then(Value::as_str) != Some(IDENTIFICATION_FORMAT) {
-        return Err(err(path, format!("is not an identification file (no \"format\": \"{IDENTIFICATION_FORMAT}\")")));
+        return Err(err(
+            path,
+            format!("is not an identification file (no \"format\": \"{IDENTIFICATION_FORMAT}\")"),
+        ));
     }
     match v.get("format_version").and_then(Value::as_u64) {
         Some(IDENTIFICATION_FORMAT_VERSION) => {}
         other => return Err(err(path, format!("format_version {other:?}: this build reads version {IDENTIFICATION_FORMAT_VERSION}"))),
     }
-    let stored = v.get("checksum").and_then(Value::as_str).unwrap_or("").to_string();
-    let payload = v.get_mut("payload").map(Value::take).ok_or_else(|| err(path, "has no payload"))?;
+    let stored = v
+        .get("checksum")
+        .and_then(Value::as_str)
+        .unwrap_or("")
+        .to_string();
+    let payload = v
+        .get_mut("payload")
+        .map(Value::take)
+        .ok_or_else(|| err(path, "has no payload"))?;
     let computed = checksum(&payload);
     if stored != computed {
         return Err(err(path, format!("checksum mismatch (stored {stored}, computed {computed}): the file was changed or damaged")));

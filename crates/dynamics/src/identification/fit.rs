@@ -22,8 +22,15 @@ fn ridge_grid() -> impl Iterator<Item = f64> {
 
 /// Where settings are scored: a separate recording, or held-out contiguous stretches.
 enum Held<'a> {
-    Recording { train: Normal, validation: Normal, samples: Samples<'a> },
-    Folds { blocks: Vec<Normal>, total: Normal },
+    Recording {
+        train: Normal,
+        validation: Normal,
+        samples: Samples<'a>,
+    },
+    Folds {
+        blocks: Vec<Normal>,
+        total: Normal,
+    },
 }
 
 /// The least-squares solution on `normal` with these columns and ridge: over physically
@@ -35,7 +42,13 @@ struct Fitter {
 }
 
 impl Fitter {
-    fn fit(&self, normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> Option<DVector<f64>> {
+    fn fit(
+        &self,
+        normal: &Normal,
+        active: &[bool],
+        prior: &DVector<f64>,
+        ridge: f64,
+    ) -> Option<DVector<f64>> {
         if self.physical {
             solve_consistent(normal, active, prior, ridge, self.bodies)
         } else {
@@ -48,7 +61,9 @@ impl Held<'_> {
     /// Mean squared error on held-out motion of the fit with these columns and ridge.
     fn score(&self, fitter: Fitter, active: &[bool], prior: &DVector<f64>, ridge: f64) -> f64 {
         match self {
-            Held::Recording { train, validation, .. } => match fitter.fit(train, active, prior, ridge) {
+            Held::Recording {
+                train, validation, ..
+            } => match fitter.fit(train, active, prior, ridge) {
                 Some(x) => validation.squared_error(&x) / validation.rows as f64,
                 None => f64::INFINITY,
             },
@@ -99,13 +114,18 @@ pub fn identify(
     if let Some(v) = validation {
         v.check("validation samples", n)?;
         if v.len() < 10 {
-            return Err(DynamicsError::InvalidArgument(format!("validation samples: {} are too few (need 10)", v.len())));
+            return Err(DynamicsError::InvalidArgument(format!(
+                "validation samples: {} are too few (need 10)",
+                v.len()
+            )));
         }
     }
     let width = settings.coulomb_width;
     let p = columns(n);
     let mut prior = DVector::zeros(p);
-    prior.rows_mut(0, PARAMETERS_PER_BODY * n).copy_from_slice(&inertial_parameters(model));
+    prior
+        .rows_mut(0, PARAMETERS_PER_BODY * n)
+        .copy_from_slice(&inertial_parameters(model));
     let weights = joint_weights(model, train, width, settings.friction, &prior)?;
     let held = match validation {
         Some(v) => Held::Recording {
@@ -121,19 +141,30 @@ pub fn identify(
         }
     };
     let joint_col = |i: usize, f: usize| PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + f;
-    let mut active: Vec<bool> = (0..p).map(|c| c < PARAMETERS_PER_BODY * n || settings.friction).collect();
+    let mut active: Vec<bool> = (0..p)
+        .map(|c| c < PARAMETERS_PER_BODY * n || settings.friction)
+        .collect();
     for i in 0..n {
         for f in FIRST_SPRING_FEATURE..JOINT_FEATURES {
             active[joint_col(i, f)] = false;
         }
     }
-    let fitter = Fitter { physical: settings.physical_consistency, bodies: n };
+    let fitter = Fitter {
+        physical: settings.physical_consistency,
+        bodies: n,
+    };
     let choose_ridge = |active: &[bool]| -> (f64, f64) {
         match settings.ridge {
             Some(r) => (r, held.score(fitter, active, &prior, r)),
             None => ridge_grid()
                 .map(|r| (r, held.score(fitter, active, &prior, r)))
-                .fold((f64::NAN, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best }),
+                .fold((f64::NAN, f64::INFINITY), |best, c| {
+                    if c.1 < best.1 {
+                        c
+                    } else {
+                        best
+                    }
+                }),
         }
     };
     let (mut ridge, mut best) = choose_ridge(&active);
@@ -159,11 +190,17 @@ pub fn identify(
         ));
     }
     let fit = |normal: &Normal| -> Result<(DVector<f64>, Vec<usize>), DynamicsError> {
-        let x = fitter.fit(normal, &active, &prior, ridge).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular".into()))?;
+        let x = fitter.fit(normal, &active, &prior, ridge).ok_or_else(|| {
+            DynamicsError::InvalidArgument(
+                "identification: the least-squares system is singular".into(),
+            )
+        })?;
         // Bodies the unconstrained fit would have made impossible (the constrained fit
         // keeps them possible; listed so that a user sees where the data disagree).
         let impossible = match solve(normal, &active, &prior, ridge) {
-            Some(free) if settings.physical_consistency => (0..n).filter(|&b| !body_possible(&free, b)).collect(),
+            Some(free) if settings.physical_consistency => {
+                (0..n).filter(|&b| !body_possible(&free, b)).collect()
+            }
             _ => Vec::new(),
         };
         Ok((x, impossible))
@@ -171,7 +208,10 @@ pub fn identify(
     let (x, projected) = fit(held.all_training())?;
     let identified = Identification::from_solution(model, &x, width)?;
     let (per_joint, held_out) = match &held {
-        Held::Recording { samples, .. } => (identified.joint_errors(samples)?.rms, "validation recording".to_string()),
+        Held::Recording { samples, .. } => (
+            identified.joint_errors(samples)?.rms,
+            "validation recording".to_string(),
+        ),
         Held::Folds { blocks, total } => {
             // The reported error of each stretch comes from a fit that never saw it.
             let mut sq = vec![0.0; n];
@@ -181,16 +221,25 @@ pub fn identify(
                 rest.sub(normal);
                 let (xb, _) = fit(&rest)?;
                 let id = Identification::from_solution(model, &xb, width)?;
-                let (s, e) = (b * train.len() / blocks.len(), (b + 1) * train.len() / blocks.len());
+                let (s, e) = (
+                    b * train.len() / blocks.len(),
+                    (b + 1) * train.len() / blocks.len(),
+                );
                 let part = train.slice(s, e);
                 let errs = id.joint_errors(&part)?;
-                for i in 0..n {
-                    sq[i] += errs.rms[i].powi(2) * part.len() as f64;
+                for (s, e) in sq.iter_mut().zip(&errs.rms) {
+                    *s += e.powi(2) * part.len() as f64;
                 }
                 count += part.len();
             }
             let rms: Vec<f64> = sq.iter().map(|s| (s / count as f64).sqrt()).collect();
-            (rms, format!("blocked cross-validation, {} contiguous stretches", blocks.len()))
+            (
+                rms,
+                format!(
+                    "blocked cross-validation, {} contiguous stretches",
+                    blocks.len()
+                ),
+            )
         }
     };
     // The URDF's own error on the same held-out motion (it was fitted to nothing).
@@ -213,27 +262,49 @@ pub fn identify(
         validation_samples: validation.map_or(0, |v| v.len()),
         settings: settings.clone(),
     };
-    Ok(Identification { summary, ..identified })
+    Ok(Identification {
+        summary,
+        ..identified
+    })
 }
 
 /// Each joint's weight in the least squares: one over its residual rms after a plain
 /// fit (weighted least squares: a joint with small torques counts as much as one with
 /// large torques, relative to how well it can be explained).
-fn joint_weights(model: &Model, train: &Samples, width: f64, friction: bool, prior: &DVector<f64>) -> Result<Vec<f64>, DynamicsError> {
+fn joint_weights(
+    model: &Model,
+    train: &Samples,
+    width: f64,
+    friction: bool,
+    prior: &DVector<f64>,
+) -> Result<Vec<f64>, DynamicsError> {
     let n = model.nq();
     let ones = vec![1.0; n];
     let normal = accumulate(model, train, width, 1, &ones)?.remove(0);
-    let active: Vec<bool> = (0..prior.len()).map(|c| c < PARAMETERS_PER_BODY * n || (friction && (c - PARAMETERS_PER_BODY * n) % JOINT_FEATURES < FIRST_SPRING_FEATURE)).collect();
+    let active: Vec<bool> = (0..prior.len())
+        .map(|c| {
+            c < PARAMETERS_PER_BODY * n
+                || (friction
+                    && (c - PARAMETERS_PER_BODY * n) % JOINT_FEATURES < FIRST_SPRING_FEATURE)
+        })
+        .collect();
     let x = solve(&normal, &active, prior, 1e-6).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular (does the recording move every joint?)".into()))?;
-    let rms = Identification::from_solution(model, &x, width)?.joint_errors(train)?.rms;
+    let rms = Identification::from_solution(model, &x, width)?
+        .joint_errors(train)?
+        .rms;
     let largest = rms.iter().copied().fold(0.0, f64::max);
-    Ok(rms.iter().map(|r| 1.0 / r.max(1e-3 * largest).max(1e-12)).collect())
+    Ok(rms
+        .iter()
+        .map(|r| 1.0 / r.max(1e-3 * largest).max(1e-12))
+        .collect())
 }
 
 fn body_possible(x: &DVector<f64>, b: usize) -> bool {
     let mut p = [0.0; PARAMETERS_PER_BODY];
     p.copy_from_slice(&x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
-    crate::identification::consistency::is_physically_consistent(&crate::spatial::Inertia::from_parameters(&p))
+    crate::identification::consistency::is_physically_consistent(
+        &crate::spatial::Inertia::from_parameters(&p),
+    )
 }
 
 /// Condition number of the training data's base regressor, from the Gram matrix of its
@@ -242,9 +313,15 @@ fn base_condition(base: &BaseParameters, normal: &Normal) -> f64 {
     let idx = base.independent();
     let g = nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| {
         let (a, b) = (idx[r], idx[c]);
-        normal.gram[(a, b)] / (normal.gram[(a, a)] * normal.gram[(b, b)]).sqrt().max(1e-300)
+        normal.gram[(a, b)]
+            / (normal.gram[(a, a)] * normal.gram[(b, b)])
+                .sqrt()
+                .max(1e-300)
     });
     let e = g.symmetric_eigenvalues();
-    if e.min() > 0.0 { (e.max() / e.min()).sqrt() } else { f64::INFINITY }
+    if e.min() > 0.0 {
+        (e.max() / e.min()).sqrt()
+    } else {
+        f64::INFINITY
+    }
 }
-

@@ -71,7 +71,17 @@ impl JointTerms {
     /// The coefficients in feature order.
     fn coefficients(&self) -> [f64; JOINT_FEATURES] {
         let (c, s) = (&self.coulomb, &self.spring);
-        [self.armature, self.viscous, c[0], c[1], self.offset, s[0], s[1], s[2], s[3]]
+        [
+            self.armature,
+            self.viscous,
+            c[0],
+            c[1],
+            self.offset,
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+        ]
     }
 
     /// Whether any term is non-zero.
@@ -81,7 +91,9 @@ impl JointTerms {
 
     /// All coefficients finite and the width positive.
     pub(crate) fn is_valid(&self) -> bool {
-        self.coefficients().iter().all(|v| v.is_finite()) && self.coulomb_width.is_finite() && self.coulomb_width > 0.0
+        self.coefficients().iter().all(|v| v.is_finite())
+            && self.coulomb_width.is_finite()
+            && self.coulomb_width > 0.0
     }
 }
 
@@ -91,5 +103,15 @@ impl JointTerms {
 pub(crate) fn features(q: f64, qd: f64, qdd: f64, width: f64, out: &mut [f64; JOINT_FEATURES]) {
     let (s, c) = q.sin_cos();
     // sin 2q and cos 2q from sin q and cos q: one sin_cos call per sample.
-    *out = [qdd, qd, (qd / width).tanh(), (qd / (SECOND_WIDTH * width)).tanh(), 1.0, s, c, 2.0 * s * c, c * c - s * s];
+    *out = [
+        qdd,
+        qd,
+        (qd / width).tanh(),
+        (qd / (SECOND_WIDTH * width)).tanh(),
+        1.0,
+        s,
+        c,
+        2.0 * s * c,
+        c * c - s * s,
+    ];
 }

@@ -88,8 +88,15 @@ impl Identification {
     /// says), so that every consumer of a nominal model takes either.
     pub fn from_model(model: Model) -> Self {
         let n = model.nq();
-        let none = JointTerms { coulomb_width: IdentificationSettings::default().coulomb_width, ..Default::default() };
-        Identification { model, joint_terms: vec![none; n], summary: IdentificationSummary::empty(n) }
+        let none = JointTerms {
+            coulomb_width: IdentificationSettings::default().coulomb_width,
+            ..Default::default()
+        };
+        Identification {
+            model,
+            joint_terms: vec![none; n],
+            summary: IdentificationSummary::empty(n),
+        }
     }
 
     /// Whether any joint term is non-zero (an identification, not a bare URDF model).
@@ -105,14 +112,24 @@ impl Identification {
         let mut data = Data::new(&self.model);
         let mut out = vec![0.0; n];
         for (row, target) in inputs.chunks_exact(3 * n).zip(torques.chunks_exact_mut(n)) {
-            self.predict(&mut data, &row[..n], &row[n..2 * n], &row[2 * n..], &mut out)?;
+            self.predict(
+                &mut data,
+                &row[..n],
+                &row[n..2 * n],
+                &row[2 * n..],
+                &mut out,
+            )?;
             target.iter_mut().zip(&out).for_each(|(t, m)| *t -= m);
         }
         Ok(())
     }
 
     /// From a solution vector `[10 n inertial | 7 per joint]`.
-    pub(crate) fn from_solution(model: &Model, x: &nalgebra::DVector<f64>, width: f64) -> Result<Self, DynamicsError> {
+    pub(crate) fn from_solution(
+        model: &Model,
+        x: &nalgebra::DVector<f64>,
+        width: f64,
+    ) -> Result<Self, DynamicsError> {
         let n = model.nq();
         let split = PARAMETERS_PER_BODY * n;
         let identified = with_inertial_parameters(model, &x.as_slice()[..split])?;
@@ -120,12 +137,23 @@ impl Identification {
             .chunks_exact(joint_terms::JOINT_FEATURES)
             .map(|c| JointTerms::from_coefficients(c, width))
             .collect();
-        Ok(Identification { model: identified, joint_terms, summary: IdentificationSummary::empty(n) })
+        Ok(Identification {
+            model: identified,
+            joint_terms,
+            summary: IdentificationSummary::empty(n),
+        })
     }
 
     /// The torque the identified arm needs for `(q, q', q'')` (N m), into `out`: RNEA on
     /// the identified model plus each joint's terms. Allocation-free.
-    pub fn predict(&self, data: &mut Data, q: &[f64], qdot: &[f64], qddot: &[f64], out: &mut [f64]) -> Result<(), DimensionError> {
+    pub fn predict(
+        &self,
+        data: &mut Data,
+        q: &[f64],
+        qdot: &[f64],
+        qddot: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), DimensionError> {
         check_len("out", out, self.model.nq())?;
         let tau = rnea(&self.model, data, q, qdot, qddot)?;
         for (i, o) in out.iter_mut().enumerate() {
@@ -136,7 +164,12 @@ impl Identification {
 
     /// Each joint's friction, offset and springs at `(q, q')` (no rotor inertia), into
     /// `out`: what a momentum observer subtracts besides gravity. Allocation-free.
-    pub fn joint_friction_torque(&self, q: &[f64], qdot: &[f64], out: &mut [f64]) -> Result<(), DimensionError> {
+    pub fn joint_friction_torque(
+        &self,
+        q: &[f64],
+        qdot: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), DimensionError> {
         let n = self.model.nq();
         check_len("q", q, n)?;
         check_len("qdot", qdot, n)?;
@@ -165,7 +198,9 @@ impl Identification {
             }
         }
         let len = samples.len().max(1) as f64;
-        Ok(JointErrors { rms: sq.iter().map(|s| (s / len).sqrt()).collect() })
+        Ok(JointErrors {
+            rms: sq.iter().map(|s| (s / len).sqrt()).collect(),
+        })
     }
 }
 
@@ -191,7 +226,13 @@ impl<'a> Samples<'a> {
     /// Samples `start..end`.
     pub fn slice(&self, start: usize, end: usize) -> Samples<'a> {
         let r = start * self.dof..end * self.dof;
-        Samples { q: &self.q[r.clone()], qdot: &self.qdot[r.clone()], qddot: &self.qddot[r.clone()], tau: &self.tau[r], dof: self.dof }
+        Samples {
+            q: &self.q[r.clone()],
+            qdot: &self.qdot[r.clone()],
+            qddot: &self.qddot[r.clone()],
+            tau: &self.tau[r],
+            dof: self.dof,
+        }
     }
 }
 

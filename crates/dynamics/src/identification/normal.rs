@@ -26,7 +26,12 @@ pub(crate) struct Normal {
 
 impl Normal {
     pub fn zeros(p: usize) -> Self {
-        Normal { gram: DMatrix::zeros(p, p), rhs: DVector::zeros(p), yy: 0.0, rows: 0 }
+        Normal {
+            gram: DMatrix::zeros(p, p),
+            rhs: DVector::zeros(p),
+            yy: 0.0,
+            rows: 0,
+        }
     }
 
     pub fn add(&mut self, o: &Normal) {
@@ -66,8 +71,10 @@ pub(crate) fn sample_rows(
     let n = model.nq();
     let (q, qd, qdd, _) = samples.row(k);
     let y = joint_torque_regressor(model, data, q, qd, qdd)?;
-    out.view_mut((0, 0), (n, PARAMETERS_PER_BODY * n)).copy_from(y);
-    out.view_mut((0, PARAMETERS_PER_BODY * n), (n, JOINT_FEATURES * n)).fill(0.0);
+    out.view_mut((0, 0), (n, PARAMETERS_PER_BODY * n))
+        .copy_from(y);
+    out.view_mut((0, PARAMETERS_PER_BODY * n), (n, JOINT_FEATURES * n))
+        .fill(0.0);
     let mut f = [0.0; JOINT_FEATURES];
     for i in 0..n {
         features(q[i], qd[i], qdd[i], width, &mut f);
@@ -80,7 +87,13 @@ pub(crate) fn sample_rows(
 
 /// The normal equations of `blocks` contiguous stretches of `samples` (the last takes the
 /// remainder), each joint's rows multiplied by its weight.
-pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: usize, weights: &[f64]) -> Result<Vec<Normal>, DynamicsError> {
+pub(crate) fn accumulate(
+    model: &Model,
+    samples: &Samples,
+    width: f64,
+    blocks: usize,
+    weights: &[f64],
+) -> Result<Vec<Normal>, DynamicsError> {
     let n = model.nq();
     let p = columns(n);
     let len = samples.len();
@@ -95,7 +108,14 @@ pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: u
         while k < end {
             let m = (end - k).min(BATCH);
             for s in 0..m {
-                sample_rows(model, &mut data, samples, k + s, width, &mut w.view_mut((s * n, 0), (n, p)))?;
+                sample_rows(
+                    model,
+                    &mut data,
+                    samples,
+                    k + s,
+                    width,
+                    &mut w.view_mut((s * n, 0), (n, p)),
+                )?;
                 y.rows_mut(s * n, n).copy_from_slice(samples.row(k + s).3);
                 for (i, wi) in weights.iter().enumerate() {
                     w.row_mut(s * n + i).scale_mut(*wi);
@@ -119,23 +139,37 @@ pub(crate) fn accumulate(model: &Model, samples: &Samples, width: f64, blocks: u
 /// URDF), a negligible one for the joint terms (no prior knowledge to pull toward).
 pub(crate) fn ridge_weight(column: usize, columns: usize, ridge: f64) -> f64 {
     let inertial = columns / (PARAMETERS_PER_BODY + JOINT_FEATURES) * PARAMETERS_PER_BODY;
-    if column < inertial { ridge } else { 1e-9 }
+    if column < inertial {
+        ridge
+    } else {
+        1e-9
+    }
 }
 
 /// Each column's scale in the ridge penalty: its mean square on these rows, floored at
 /// 1e-4 of the median over the active columns, so that a column the motion barely excites
 /// is held at the prior instead of taking absurd values.
 pub(crate) fn column_scales(normal: &Normal, active: &[bool]) -> Vec<f64> {
-    let mut diag: Vec<f64> = (0..active.len()).filter(|&c| active[c]).map(|c| normal.gram[(c, c)]).collect();
+    let mut diag: Vec<f64> = (0..active.len())
+        .filter(|&c| active[c])
+        .map(|c| normal.gram[(c, c)])
+        .collect();
     diag.sort_by(f64::total_cmp);
     let median = diag.get(diag.len() / 2).copied().unwrap_or(0.0);
-    (0..active.len()).map(|c| normal.gram[(c, c)].max(1e-4 * median).max(1e-300)).collect()
+    (0..active.len())
+        .map(|c| normal.gram[(c, c)].max(1e-4 * median).max(1e-300))
+        .collect()
 }
 
 /// Ridge solution on the `active` columns, pulled toward `prior` with weight `ridge`
 /// relative to each column's own scale (`ridge * G_cc`); inactive columns stay at the
 /// prior. Columns that carry nothing stay at the prior too.
-pub(crate) fn solve(normal: &Normal, active: &[bool], prior: &DVector<f64>, ridge: f64) -> Option<DVector<f64>> {
+pub(crate) fn solve(
+    normal: &Normal,
+    active: &[bool],
+    prior: &DVector<f64>,
+    ridge: f64,
+) -> Option<DVector<f64>> {
     let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
     let scales = column_scales(normal, active);
     let m = idx.len();

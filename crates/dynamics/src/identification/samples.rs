@@ -32,7 +32,12 @@ impl Samples<'_> {
     /// Sample `k`'s four rows.
     pub(crate) fn row(&self, k: usize) -> (&[f64], &[f64], &[f64], &[f64]) {
         let r = k * self.dof..(k + 1) * self.dof;
-        (&self.q[r.clone()], &self.qdot[r.clone()], &self.qddot[r.clone()], &self.tau[r])
+        (
+            &self.q[r.clone()],
+            &self.qdot[r.clone()],
+            &self.qddot[r.clone()],
+            &self.tau[r],
+        )
     }
 
     /// Equal lengths, a multiple of `dof`, `dof` equal to the model's, every value finite.
@@ -42,15 +47,33 @@ impl Samples<'_> {
             return bad(format!("{} joints, the model has {dof}", self.dof));
         }
         let len = self.q.len();
-        if dof == 0 || len % dof != 0 || [self.qdot.len(), self.qddot.len(), self.tau.len()].iter().any(|&l| l != len) {
+        if dof == 0
+            || !len.is_multiple_of(dof)
+            || [self.qdot.len(), self.qddot.len(), self.tau.len()]
+                .iter()
+                .any(|&l| l != len)
+        {
             return bad(format!(
                 "arrays of {}, {}, {} and {} values do not make whole samples of {dof} joints",
-                len, self.qdot.len(), self.qddot.len(), self.tau.len()
+                len,
+                self.qdot.len(),
+                self.qddot.len(),
+                self.tau.len()
             ));
         }
-        for (name, values) in [("q", self.q), ("qdot", self.qdot), ("qddot", self.qddot), ("tau", self.tau)] {
+        for (name, values) in [
+            ("q", self.q),
+            ("qdot", self.qdot),
+            ("qddot", self.qddot),
+            ("tau", self.tau),
+        ] {
             if let Some(p) = values.iter().position(|v| !v.is_finite()) {
-                return bad(format!("{name} of joint {} at sample {} is {}", p % dof, p / dof, values[p]));
+                return bad(format!(
+                    "{name} of joint {} at sample {} is {}",
+                    p % dof,
+                    p / dof,
+                    values[p]
+                ));
             }
         }
         Ok(())

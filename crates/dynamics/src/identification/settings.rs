@@ -45,20 +45,39 @@ impl Default for IdentificationSettings {
 impl IdentificationSettings {
     /// Checks every setting; the error names it.
     pub fn validate(&self) -> Result<(), DynamicsError> {
-        let bad = |key: &str, m: String| Err(DynamicsError::InvalidArgument(format!("identification setting {key}: {m}")));
+        let bad = |key: &str, m: String| {
+            Err(DynamicsError::InvalidArgument(format!(
+                "identification setting {key}: {m}"
+            )))
+        };
         if !(self.coulomb_width.is_finite() && self.coulomb_width > 0.0) {
-            return bad("coulomb_width", format!("is {}, must be a positive number of rad/s (default 0.01)", self.coulomb_width));
+            return bad(
+                "coulomb_width",
+                format!(
+                    "is {}, must be a positive number of rad/s (default 0.01)",
+                    self.coulomb_width
+                ),
+            );
         }
         if !(2..=50).contains(&self.folds) {
-            return bad("folds", format!("is {}, must be 2 to 50 (default 5)", self.folds));
+            return bad(
+                "folds",
+                format!("is {}, must be 2 to 50 (default 5)", self.folds),
+            );
         }
         if let Some(r) = self.ridge {
             if !(r.is_finite() && r >= 0.0) {
-                return bad("ridge", format!("is {r}, must be >= 0 (or absent: chosen on held-out motion)"));
+                return bad(
+                    "ridge",
+                    format!("is {r}, must be >= 0 (or absent: chosen on held-out motion)"),
+                );
             }
         }
         if self.springs && !self.friction {
-            return bad("springs", "needs friction = true (springs are joint terms)".into());
+            return bad(
+                "springs",
+                "needs friction = true (springs are joint terms)".into(),
+            );
         }
         Ok(())
     }
