@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
 use crate::identification::consistency::{from_log_cholesky, margin, to_log_cholesky};
-use crate::identification::normal::{column_scales, ridge_weight, Normal};
+use crate::identification::normal::{reduced_system, Normal};
 
 const MAX_ITERATIONS: usize = 300;
 /// Finite-difference step of the log-Cholesky Jacobian.
@@ -27,21 +27,7 @@ impl Quadratic {
         prior: &DVector<f64>,
         ridge: f64,
     ) -> (Self, Vec<usize>) {
-        let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
-        let scales = column_scales(normal, active);
-        let m = idx.len();
-        let mut a = DMatrix::from_fn(m, m, |r, c| normal.gram[(idx[r], idx[c])]);
-        let mut c = DVector::from_fn(m, |r, _| normal.rhs[idx[r]]);
-        for (r, &cr) in idx.iter().enumerate() {
-            for k in 0..active.len() {
-                if !active[k] && prior[k] != 0.0 {
-                    c[r] -= normal.gram[(cr, k)] * prior[k];
-                }
-            }
-            let d = ridge_weight(cr, active.len(), ridge) * scales[cr];
-            a[(r, r)] += d;
-            c[r] += d * prior[cr];
-        }
+        let (a, c, idx) = reduced_system(normal, active, prior, ridge);
         (
             Quadratic {
                 a,

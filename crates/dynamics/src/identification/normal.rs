@@ -161,21 +161,21 @@ pub(crate) fn column_scales(normal: &Normal, active: &[bool]) -> Vec<f64> {
         .collect()
 }
 
-/// Ridge solution on the `active` columns, pulled toward `prior` with weight `ridge`
-/// relative to each column's own scale (`ridge * G_cc`); inactive columns stay at the
-/// prior. Columns that carry nothing stay at the prior too.
-pub(crate) fn solve(
+/// The ridge-regularised normal equations reduced to the `active` columns: `(A, c, idx)`
+/// with `A = G + D`, `c = b + D prior - G_inactive prior_inactive`, `D` the ridge weight
+/// times each column's scale (`ridge_weight`, `column_scales`); inactive columns are held
+/// at the prior.
+pub(crate) fn reduced_system(
     normal: &Normal,
     active: &[bool],
     prior: &DVector<f64>,
     ridge: f64,
-) -> Option<DVector<f64>> {
+) -> (DMatrix<f64>, DVector<f64>, Vec<usize>) {
     let idx: Vec<usize> = (0..active.len()).filter(|&c| active[c]).collect();
     let scales = column_scales(normal, active);
     let m = idx.len();
     let mut a = DMatrix::from_fn(m, m, |r, c| normal.gram[(idx[r], idx[c])]);
     let mut rhs = DVector::from_fn(m, |r, _| normal.rhs[idx[r]]);
-    // Inactive columns held at the prior move to the right-hand side.
     for (r, &cr) in idx.iter().enumerate() {
         for c in 0..active.len() {
             if !active[c] && prior[c] != 0.0 {
@@ -186,6 +186,18 @@ pub(crate) fn solve(
         a[(r, r)] += d;
         rhs[r] += d * prior[cr];
     }
+    (a, rhs, idx)
+}
+
+/// Ridge solution on the `active` columns, pulled toward `prior` ([`reduced_system`]);
+/// inactive columns stay at the prior.
+pub(crate) fn solve(
+    normal: &Normal,
+    active: &[bool],
+    prior: &DVector<f64>,
+    ridge: f64,
+) -> Option<DVector<f64>> {
+    let (a, rhs, idx) = reduced_system(normal, active, prior, ridge);
     let sol = a.cholesky()?.solve(&rhs);
     let mut x = prior.clone();
     for (r, &c) in idx.iter().enumerate() {
