@@ -50,12 +50,13 @@ pub use algorithms::rnea::{
     gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea, rnea_with_tip_wrench,
 };
 pub use data::Data;
-pub use identification::{
-    identify, is_physically_consistent, BaseParameters, Identification, IdentificationFile,
-    IdentificationSettings, IdentificationSummary, JointTerms, Samples, IDENTIFICATION_FORMAT,
-    IDENTIFICATION_FORMAT_VERSION,
-};
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
+pub use identification::{
+    excitation, identify, is_physically_consistent, BaseParameters, Excitation, ExcitationSettings,
+    FourierSeries, Identification, IdentificationFile, IdentificationSettings,
+    IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_VELOCITY_LIMIT,
+    IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION,
+};
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,
 };

@@ -15,6 +15,7 @@
 mod base;
 mod consistency;
 mod constrained;
+mod excitation;
 mod file;
 mod fit;
 mod joint_terms;
@@ -24,6 +25,9 @@ mod settings;
 
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;
+pub use excitation::{
+    excitation, Excitation, ExcitationSettings, FourierSeries, LimitUse, DEFAULT_VELOCITY_LIMIT,
+};
 pub use file::{IdentificationFile, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION};
 pub use fit::identify;
 pub use joint_terms::JointTerms;
