@@ -1,6 +1,6 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
-//! train the learned observer (`train`, `grow`), query an arm's dynamics (`dynamics`,
-//! `model`).
+//! train the learned observer (`train`, `grow`), identify the arm (`excite`, `identify`,
+//! `evaluate`), query an arm's dynamics (`dynamics`, `model`).
 //!
 //! Exit codes:
 //!
@@ -16,6 +16,7 @@
 
 mod dynamics_cmd;
 mod evaluate_cmd;
+mod excite_cmd;
 mod identify_cmd;
 mod list_cmd;
 mod progress;
@@ -52,6 +53,8 @@ enum Command {
     Train(train_cmd::TrainArgs),
     /// Add nodes to a trained network (incremental growth) and save the result.
     Grow(train_cmd::GrowArgs),
+    /// Write an excitation trajectory for identification (free-motion CSV; tau from the URDF).
+    Excite(excite_cmd::ExciteArgs),
     /// Identify the arm's inertial parameters and joint friction from free motion.
     Identify(identify_cmd::IdentifyArgs),
     /// Run every estimator the given files allow over a free-motion recording and print its false torque.
@@ -126,6 +129,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_cmd::report(&args),
         Command::Train(args) => train_cmd::train(&args),
         Command::Grow(args) => train_cmd::grow(&args),
+        Command::Excite(args) => excite_cmd::excite(&args),
         Command::Identify(args) => identify_cmd::identify_cmd(&args),
         Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
     };
