@@ -289,7 +289,22 @@ impl Bounds {
 }
 
 /// An excitation for `model` within its limits, optimised for the condition number of the
-/// base inertial regressor (module documentation). Deterministic for a seed.
+/// base inertial regressor. Deterministic for a seed.
+///
+/// Per joint `q(t) = q0 + sum_l a_l / (w l) sin(w l t) - b_l / (w l) cos(w l t)`, `w = 2 pi /
+/// period`, with `a_1`, `b_1` fixed so that the motion starts and ends at rest; each joint
+/// scaled to its position range less the margin, its velocity limit
+/// ([`DEFAULT_VELOCITY_LIMIT`] where the URDF has none) and `acceleration_limit` on the output
+/// samples. The criterion is the base inertial regressor's condition number (columns at unit
+/// norm; the joint terms are not included), lowered from 16 random starts by a coordinate
+/// search of `iterations` evaluations.
+///
+/// ```no_run
+/// use admittance_dynamics::{excitation, ExcitationSettings, Model};
+/// let model = Model::from_urdf_file("models/baxter_left_arm.urdf".as_ref(), None, None).unwrap();
+/// let e = excitation(&model, &ExcitationSettings { duration: 60.0, ..Default::default() }).unwrap();
+/// println!("condition number {:.2} ({} samples)", e.condition_number, e.len());
+/// ```
 pub fn excitation(
     model: &Model,
     settings: &ExcitationSettings,

@@ -2,6 +2,8 @@
 //! every body and what each joint adds (rotor inertia, friction, offset, springs), fitted
 //! by least squares to free motion, regularised toward the URDF, physically consistent,
 //! with every choice made and every error measured on motion the fit did not see.
+//! [`excitation`] designs the motion to record for it: a finite Fourier series per joint
+//! inside the arm's limits, optimised for the base regressor's condition number.
 //!
 //! ```no_run
 //! use admittance_dynamics::{identify, IdentificationSettings, Model, Samples};
