@@ -1,6 +1,7 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
 //! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
-//! `import` from a rosbag2 bag), query an arm's dynamics (`dynamics`, `model`).
+//! `import` from a rosbag2 bag), identify the arm (`excite`, `identify`, `evaluate`), query an
+//! arm's dynamics (`dynamics`, `model`).
 //!
 //! Exit codes:
 //!
@@ -17,6 +18,7 @@
 
 mod dynamics_cmd;
 mod evaluate_cmd;
+mod excite_cmd;
 mod identify_cmd;
 mod import_cmd;
 mod interrupt;
@@ -55,6 +57,8 @@ enum Command {
     Train(train_cmd::TrainArgs),
     /// Add nodes to a trained network (incremental growth) and save the result.
     Grow(train_cmd::GrowArgs),
+    /// Write an excitation trajectory for identification (free-motion CSV; tau from the URDF).
+    Excite(excite_cmd::ExciteArgs),
     /// Identify the arm's inertial parameters and joint friction from free motion.
     Identify(identify_cmd::IdentifyArgs),
     /// Run every estimator the given files allow over a free-motion recording and print its false torque.
@@ -132,6 +136,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_cmd::report(&args),
         Command::Train(args) => train_cmd::train(&args),
         Command::Grow(args) => train_cmd::grow(&args),
+        Command::Excite(args) => excite_cmd::excite(&args),
         Command::Identify(args) => identify_cmd::identify_cmd(&args),
         Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
         Command::Import(args) => import_cmd::import(&args),

@@ -52,9 +52,10 @@ pub use algorithms::rnea::{
 pub use data::Data;
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use identification::{
-    identify, is_physically_consistent, BaseParameters, Identification, IdentificationFile,
-    IdentificationSettings, IdentificationSummary, JointTerms, Samples, IDENTIFICATION_FORMAT,
-    IDENTIFICATION_FORMAT_VERSION,
+    excitation, identify, is_physically_consistent, BaseParameters, Excitation, ExcitationSettings,
+    FourierSeries, Identification, IdentificationFile, IdentificationSettings,
+    IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_VELOCITY_LIMIT,
+    IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION,
 };
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,

@@ -2,6 +2,8 @@
 //! every body and what each joint adds (rotor inertia, friction, offset, springs), fitted
 //! by least squares to free motion, regularised toward the URDF, physically consistent,
 //! with every choice made and every error measured on motion the fit did not see.
+//! [`excitation`] designs the motion to record for it: a finite Fourier series per joint
+//! inside the arm's limits, optimised for the base regressor's condition number.
 //!
 //! ```no_run
 //! use admittance_dynamics::{identify, IdentificationSettings, Model, Samples};
@@ -15,6 +17,7 @@
 mod base;
 mod consistency;
 mod constrained;
+mod excitation;
 mod file;
 mod fit;
 mod joint_terms;
@@ -24,6 +27,9 @@ mod settings;
 
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;
+pub use excitation::{
+    excitation, Excitation, ExcitationSettings, FourierSeries, LimitUse, DEFAULT_VELOCITY_LIMIT,
+};
 pub use file::{IdentificationFile, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION};
 pub use fit::identify;
 pub use joint_terms::JointTerms;
