@@ -11,6 +11,7 @@ use admittance_dynamics::{
 };
 use numpy::PyArray2;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::convert::{rows, value_error, vector_out};
 use crate::model::PyModel;
@@ -268,4 +269,35 @@ pub(crate) fn nominal_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Arc<Id
     Err(pyo3::exceptions::PyTypeError::new_err(format!(
         "`{name}` must be a Model or an Identification"
     )))
+}
+
+/// A motion designed for identification (`admittance excite`): a finite Fourier series per
+/// joint inside the position, velocity and acceleration limits of `m`, starting and ending
+/// at rest, optimised for the condition number of the base regressor. Returns a dict of
+/// `t` `(N,)` and `q`, `qdot`, `qddot` `(N, n)` arrays and `condition_number`.
+#[pyfunction]
+#[pyo3(signature = (m, duration, seed=1, harmonics=5, period=None, rate_hz=200.0))]
+pub fn excitation<'py>(
+    py: Python<'py>,
+    m: &Bound<'py, PyModel>,
+    duration: f64,
+    seed: u64,
+    harmonics: usize,
+    period: Option<f64>,
+    rate_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = m.get().model.clone();
+    // Without a period: the duration in equal periods of at most 10 s (as the CLI).
+    let period = period.unwrap_or_else(|| duration / (duration / 10.0).ceil().max(1.0));
+    let settings = ExcitationSettings { duration, period, harmonics, rate_hz, seed, ..Default::default() };
+    let e = py.detach(|| rust_excitation(&model, &settings)).map_err(|e| value_error(e.to_string()))?;
+    let n = e.dof;
+    let out = PyDict::new(py);
+    out.set_item("t", numpy::PyArray1::from_slice(py, &e.t))?;
+    for (name, values) in [("q", &e.q), ("qdot", &e.qdot), ("qddot", &e.qddot)] {
+        let a = numpy::ndarray::Array2::from_shape_vec((e.t.len(), n), values.clone()).map_err(|err| value_error(err.to_string()))?;
+        out.set_item(name, PyArray2::from_owned_array(py, a))?;
+    }
+    out.set_item("condition_number", e.condition_number)?;
+    Ok(out)
 }

@@ -43,6 +43,7 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(run::run, m)?,
         wrap_pyfunction!(identification::identify, m)?,
         wrap_pyfunction!(identification::load_identification, m)?,
+        wrap_pyfunction!(identification::excitation, m)?,
     ] {
         m.add_function(f)?;
     }

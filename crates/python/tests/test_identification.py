@@ -125,3 +125,15 @@ def test_real_baxter_held_out(baxter):
     rms = np.sqrt(np.mean(est ** 2))
     nmse = np.mean(np.mean(est ** 2, axis=0) / np.var(cols["tau"][~train], axis=0))
     assert rms <= 1.0 and nmse <= 0.4, (rms, nmse)
+
+
+def test_excitation_is_inside_the_limits_and_identifies(baxter):
+    e = adm.excitation(baxter, 20.0, seed=3)
+    assert e["q"].shape == (len(e["t"]), baxter.n) and e["condition_number"] < 10
+    assert np.allclose(e["qdot"][0], 0.0, atol=1e-9) and np.allclose(e["qdot"][-1], 0.0, atol=1e-6)
+    lo = np.array([-1.7016, -2.147, -3.0541, -0.05, -3.059, -1.5707, -3.059])
+    assert np.all(e["q"] > lo - 1e-9)
+    friction = (np.full(7, 1.0), np.full(7, 0.5), np.zeros(7))
+    tau = torques(baxter, e["q"], e["qdot"], e["qddot"], friction)
+    ident = adm.identify({**e, "tau": tau}, baxter)
+    assert max(ident.summary["expected_false_torque_rms"]) < 0.05

@@ -421,6 +421,17 @@ def identify(
     """Identifies the arm from free motion (``admittance identify``): settings chosen on
     ``validation`` or by blocked cross-validation over contiguous stretches. Releases the GIL."""
 
+def excitation(
+    m: Model,
+    duration: float,
+    seed: int = 1,
+    harmonics: int = 5,
+    period: Optional[float] = None,
+    rate_hz: float = 200.0,
+) -> Dict[str, Any]:
+    """A motion for identification (``admittance excite``): dict of ``t`` ``(N,)``, ``q``,
+    ``qdot``, ``qddot`` ``(N, n)`` inside the arm's limits, and ``condition_number``."""
+
 def load_identification(path: StrPath, m: Optional[Model] = None) -> Identification:
     """Reads an identification file with the URDF it names (or applied to ``m``)."""
 
