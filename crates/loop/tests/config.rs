@@ -39,12 +39,12 @@ fn unknown_keys_and_a_training_table_are_refused() {
 
 #[test]
 fn every_problem_is_named_by_its_dotted_key() {
-    let c = parse(&format!(
+    let c = parse(
         "control_rate_hz = 500.0\n[controller]\nkind = \"pd\"\n\
          [admittance]\ndamping = 3.0\nstiffness = 5.0\n\
          [task_admittance]\n\
          [observer]\nkind = \"momentum\"\ncutoff_hz = -1.0\ninput_filter_hz = 250.0\nwarmup = -0.5\nnominal_inertia_scale = 0.0\n"
-    ));
+    );
     let keys: Vec<String> = c.problems().iter().map(LoopError::key).collect();
     assert_eq!(
         keys,

@@ -267,8 +267,8 @@ impl Sensors {
     ) -> Result<&Measurement, SimError> {
         check_len("q_true", q_true, self.n)?;
         check_len("tau_commanded", tau_commanded, self.n)?;
-        for i in 0..self.n {
-            self.read_encoder(i, time, q_true[i]);
+        for (i, &q) in q_true.iter().enumerate() {
+            self.read_encoder(i, time, q);
         }
         self.chain
             .sample_at(time, &self.raw, &self.raw_time, tau_commanded)
