@@ -188,10 +188,11 @@ mod tests {
         let m = chain.sample(0.0, &[f64::NAN], &[f64::NAN]).unwrap();
         assert!(m.q_filtered[0].is_nan() && m.qdot[0] == 0.0 && m.tau_commanded[0] == 0.0);
         chain.sample(1e-3, &[1.0], &[0.0]).unwrap();
-        chain.sample(2e-3, &[1.0], &[0.0]).unwrap();
+        let m = chain.sample(2e-3, &[1.1], &[0.0]).unwrap();
+        let held = (m.q_filtered[0], m.qdot[0], m.qddot[0]);
         let m = chain.sample(3e-3, &[f64::NAN], &[0.0]).unwrap();
         assert!(m.q[0].is_nan() && !m.is_finite());
-        assert_eq!((m.q_filtered[0], m.qdot[0]), (1.0, 0.0));
+        assert_eq!((m.q_filtered[0], m.qdot[0], m.qddot[0]), held);
         assert!(chain.sample(0.0, &[1.0, 2.0], &[0.0]).is_err());
     }
 }
