@@ -49,7 +49,7 @@ pub struct TrainArgs {
     friction_features: bool,
     /// Second low-pass (Hz) on q and tau before differentiating again, the observer input
     /// conditioning of the scenarios (`observer.input_filter_hz`); 0: the columns as recorded.
-    /// The observer must be fed the same conditioning at run time (`admittance_sim::InputConditioner`).
+    /// The observer must be fed the same conditioning at run time (`admittance_loop::InputConditioner`).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
     input_filter_hz: f64,
     /// Fraction of the rows, at the end, held out for validation.

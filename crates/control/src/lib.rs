@@ -81,3 +81,8 @@ pub use task_space::{
 pub use admittance_learning::rbf::{
     GaussianRbfLayer, GrowOutcome, GrowthParams, Integrator, Placement,
 };
+
+/// The trained network of the learned observers (`LearnedObserver`, `HybridObserver`), so
+/// that a loop built from a configuration can be handed one without naming the learning
+/// layer.
+pub use admittance_learning::broad::BroadModel;

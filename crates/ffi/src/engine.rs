@@ -6,7 +6,7 @@
 //! (`crates/cli/examples/control_loop.rs`):
 //!
 //! ```text
-//!   q, tau ──► Sensors (2nd-order low-pass, backward differences) ──► Measurement
+//!   q, tau ──► SignalChain (2nd-order low-pass, backward differences) ──► Measurement
 //!   Measurement, q_d ──► ClosedLoop::step (observer -> admittance -> controller) ──► tau_cmd
 //! ```
 //!
@@ -19,10 +19,8 @@ use std::path::Path;
 
 use admittance_control::{Fault, StepStatus};
 use admittance_dynamics::{tip_jacobian, Data, Model};
-use admittance_scenario::{
-    robot_loop, ClosedLoop, LoopInput, ObserverKind, RunOptions, ScenarioSource, Trajectory,
-};
-use admittance_sim::{Measurement, SensorConfig, Sensors};
+use admittance_loop::{ClosedLoop, LoopInput, Measurement, ObserverKind, SignalChain};
+use admittance_scenario::{robot_loop, RunOptions, ScenarioSource, Trajectory};
 use nalgebra::{Matrix6, Vector6};
 
 use crate::abi::*;
@@ -73,7 +71,7 @@ pub struct RustLoop {
     model: Model,
     plant: admittance_sim::PlantConfig,
     closed_loop: ClosedLoop,
-    sensors: Sensors,
+    sensors: SignalChain,
     measurement: Measurement,
     trajectory: Trajectory,
     /// Seconds the estimate is held at zero (0 without an observer).
@@ -104,16 +102,13 @@ impl RustLoop {
         }
         let scenario = built.scenario;
         let rate = scenario.plant.control_rate_hz;
-        let signals = SensorConfig {
-            filter_cutoff_hz: scenario.plant.sensors.filter_cutoff_hz,
-            ..SensorConfig::default()
-        };
-        let sensors = Sensors::new(&built.model, &signals, rate).map_err(|e| {
-            format!(
-                "{}: plant.sensors / plant.control_rate_hz: {e}",
-                path.display()
-            )
-        })?;
+        let sensors =
+            SignalChain::new(n, scenario.plant.sensors.filter_cutoff_hz, rate).map_err(|e| {
+                format!(
+                    "{}: plant.sensors / plant.control_rate_hz: {e}",
+                    path.display()
+                )
+            })?;
         let warmup = match scenario.observer.kind {
             ObserverKind::None | ObserverKind::Oracle => 0.0,
             _ => scenario.observer.warmup,

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use admittance_dynamics::{
-    identify as rust_identify, Data, Identification, IdentificationSettings, Model, Samples,
+    excitation as rust_excitation, identify as rust_identify, Data, ExcitationSettings,
+    Identification, IdentificationSettings, Model, Samples,
 };
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -289,13 +290,23 @@ pub fn excitation<'py>(
     let model = m.get().model.clone();
     // Without a period: the duration in equal periods of at most 10 s (as the CLI).
     let period = period.unwrap_or_else(|| duration / (duration / 10.0).ceil().max(1.0));
-    let settings = ExcitationSettings { duration, period, harmonics, rate_hz, seed, ..Default::default() };
-    let e = py.detach(|| rust_excitation(&model, &settings)).map_err(|e| value_error(e.to_string()))?;
+    let settings = ExcitationSettings {
+        duration,
+        period,
+        harmonics,
+        rate_hz,
+        seed,
+        ..Default::default()
+    };
+    let e = py
+        .detach(|| rust_excitation(&model, &settings))
+        .map_err(|e| value_error(e.to_string()))?;
     let n = e.dof;
     let out = PyDict::new(py);
     out.set_item("t", numpy::PyArray1::from_slice(py, &e.t))?;
     for (name, values) in [("q", &e.q), ("qdot", &e.qdot), ("qddot", &e.qddot)] {
-        let a = numpy::ndarray::Array2::from_shape_vec((e.t.len(), n), values.clone()).map_err(|err| value_error(err.to_string()))?;
+        let a = numpy::ndarray::Array2::from_shape_vec((e.t.len(), n), values.clone())
+            .map_err(|err| value_error(err.to_string()))?;
         out.set_item(name, PyArray2::from_owned_array(py, a))?;
     }
     out.set_item("condition_number", e.condition_number)?;

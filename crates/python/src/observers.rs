@@ -6,7 +6,7 @@ use admittance_control::{
     HybridObserver, LearnedObserver, MomentumObserver, MomentumObserverConfig, Observer,
     ObserverInput, OracleObserver,
 };
-use admittance_sim::InputConditioner;
+use admittance_loop::InputConditioner;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 

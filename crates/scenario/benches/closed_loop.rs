@@ -16,12 +16,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use admittance_control::NeuralController;
 use admittance_dynamics::Model;
-use admittance_scenario::{
-    run_variant, ClosedLoop, EstimateSource, EstimateToController, LoopController, LoopInput,
-    LoopParts, RunOptions, Scenario, ScenarioSource, Trajectory,
-};
+use admittance_loop::{ClosedLoop, LoopInput, ObserverConfig};
+use admittance_scenario::{run_variant, RunOptions, Scenario, ScenarioSource, Trajectory};
 use admittance_sim::{Plant, Sensors};
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -152,16 +149,13 @@ impl Loop {
         }
         let mut plant = Plant::new(&self.model, &pc).expect("plant");
         let mut sensors = Sensors::new(&self.model, &pc.sensors, pc.control_rate_hz).expect("s");
-        let ctrl = NeuralController::new(self.model.clone(), &self.scenario.controller.neural)
-            .expect("controller");
-        let dt = plant.control_dt();
-        let mut closed_loop = ClosedLoop::new(LoopParts {
-            controller: LoopController::Neural(Box::new(ctrl)),
-            admittance: None,
-            estimate: EstimateSource::None,
-            estimate_to_controller: EstimateToController::Passed,
-            dt,
-        });
+        // The scenario's controller alone: no admittance model, no estimate.
+        let mut config = self.scenario.loop_config();
+        config.admittance = None;
+        config.task_admittance = None;
+        config.observer = ObserverConfig::default();
+        let mut closed_loop = ClosedLoop::from_config(&self.model, &config, None).expect("loop");
+        let dt = closed_loop.dt();
         let steps = (SIM_SECONDS / dt).round() as usize;
         let zeros = vec![0.0; n];
         let mut parts = [Duration::ZERO; 3];

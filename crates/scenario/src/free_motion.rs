@@ -300,7 +300,7 @@ impl FreeMotionData {
 pub fn observer_training_arrays(
     data: &FreeMotionData,
     input_filter_hz: f64,
-) -> Result<(Vec<f64>, Vec<f64>), admittance_sim::SimError> {
+) -> Result<(Vec<f64>, Vec<f64>), admittance_loop::LoopError> {
     let n = data.dof();
     let mut x = Vec::with_capacity(data.len() * 3 * n);
     let mut y = Vec::with_capacity(data.len() * n);
@@ -311,7 +311,7 @@ pub fn observer_training_arrays(
         } else {
             0.0
         };
-        let mut c = admittance_sim::InputConditioner::new(n, input_filter_hz, rate)?;
+        let mut c = admittance_loop::InputConditioner::new(n, input_filter_hz, rate)?;
         for k in 0..data.len() {
             let r = k * n..(k + 1) * n;
             c.update(&data.q[r.clone()], &data.tau[r]);

@@ -3,9 +3,9 @@
 //! health.
 
 use admittance_dynamics::Model;
-use admittance_sim::{Measurement, StepRecord};
+use admittance_loop::{ClosedLoop, LoopStatus, Measurement};
+use admittance_sim::StepRecord;
 
-use crate::closed_loop::{ClosedLoop, LoopStatus};
 use crate::hand::HandStats;
 use crate::health::Health;
 use crate::metrics::{median, rms, JointStats, ObserverStats, VariantMetrics};

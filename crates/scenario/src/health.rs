@@ -12,7 +12,7 @@
 //!   limit.
 
 use admittance_dynamics::Model;
-use admittance_sim::Measurement;
+use admittance_loop::Measurement;
 
 /// Largest meaningful angle (rad): about 160 turns.
 pub const MAX_ANGLE: f64 = 1.0e3;

@@ -1,12 +1,14 @@
 //! Scenarios of `admittance`: the TOML files in `scenarios/` (one per experiment, with
-//! named variants), the [`ClosedLoop`] that wires one control period, the runner that
-//! steps it against the simulated plant and gathers the metrics, the training of the
-//! learned observers (with a cache), and the run folder it writes.
+//! named variants), the runner that steps an `admittance_loop::ClosedLoop` against the
+//! simulated plant and gathers the metrics, the training of the learned observers (with a
+//! cache), and the run folder it writes.
 //!
 //! * [`ScenarioSource`]: a scenario file parsed once, every key with its position; a
 //!   variant resolves to a typed [`Scenario`], and every error ([`ScenarioError`]) names the
 //!   file, the line and the key.
-//! * [`ClosedLoop`]: observer -> admittance model -> controller, one period, allocation-free.
+//! * [`Scenario::loop_config`]: the scenario's `[controller]`, `[admittance]`,
+//!   `[task_admittance]` and `[observer]` tables, an `admittance_loop::LoopConfig` from
+//!   which a variant's loop is built (`ClosedLoop::from_config`).
 //! * [`run_variant`], [`run_scenario`]: run a variant / every variant into a run folder
 //!   (`admittance_runfolder` defines its files, columns and metrics).
 //! * [`FreeMotionData`]: the free-motion data format and its validating loader.
@@ -29,7 +31,6 @@
 
 mod assemble;
 mod budget;
-mod closed_loop;
 mod context;
 mod error;
 mod free_motion;
@@ -50,10 +51,6 @@ mod spec;
 mod training;
 mod trajectory;
 
-pub use closed_loop::{
-    ClosedLoop, Compliance, EstimateSource, EstimateToController, LoopController, LoopInput,
-    LoopParts, LoopStatus, ObserverStage,
-};
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use health::Divergence;
@@ -69,8 +66,7 @@ pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};
 pub use source::ScenarioSource;
 pub use spec::{
-    mid_range, AdmittanceSpec, ArmSpec, ControllerKind, ControllerSpec, DynamicNodesSpec,
-    ObserverKind, ObserverSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec,
+    mid_range, ArmSpec, DynamicNodesSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec,
     TrajectorySpec,
 };
 pub use training::{TrainedNetwork, VALIDATION_DECIMATION};

@@ -4,8 +4,8 @@
 
 use admittance_control::{true_lumped_f, GrowthRequest, NetworkId};
 use admittance_dynamics::{Data, Model};
+use admittance_loop::ClosedLoop;
 
-use crate::closed_loop::ClosedLoop;
 use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::metrics::{rms, DynamicNodeMetrics};

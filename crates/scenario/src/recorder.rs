@@ -1,7 +1,8 @@
 //! The time series a variant records: `VARIANT.csv` every `output.decimation` steps and,
 //! with `[record] free_motion_csv`, the free-motion data at every control sample.
 
-use admittance_sim::{Measurement, StepRecord};
+use admittance_loop::Measurement;
+use admittance_sim::StepRecord;
 
 use crate::hand::hand_columns;
 use crate::series::{free_motion_columns, variant_columns, TimeSeries};

@@ -7,14 +7,14 @@ use std::path::Path;
 use admittance_dynamics::Model;
 
 use crate::assemble::assemble;
-use crate::closed_loop::ClosedLoop;
 use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::progress::RunOptions;
 use crate::runner::run_variant;
 use crate::source::ScenarioSource;
-use crate::spec::{ObserverKind, Scenario};
+use crate::spec::Scenario;
 use crate::trajectory::Trajectory;
+use admittance_loop::{ClosedLoop, ObserverKind};
 
 /// What a robot's loop needs of a scenario variant.
 pub struct RobotLoop {

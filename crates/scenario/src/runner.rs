@@ -5,10 +5,10 @@
 use std::path::Path;
 
 use admittance_control::{NetworkId, ReferenceInput};
+use admittance_loop::{ClosedLoop, LoopInput};
 use admittance_sim::SimError;
 
 use crate::assemble::{assemble, Assembly};
-use crate::closed_loop::{ClosedLoop, LoopInput};
 use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};

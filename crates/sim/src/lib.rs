@@ -1,5 +1,6 @@
 //! Simulation layer of `admittance`: the plant that stands in for the robot
-//! (docs/method.md section 1) and what the controller can measure of it.
+//! (docs/method.md section 1) and its fake encoders; what is real of the measurement (filters,
+//! differentiation) is `admittance_loop`'s.
 //!
 //! * [`plant`]: the true arm: rigid-body dynamics of a (possibly perturbed) model,
 //!   friction, actuator deadzone and effort limits, the counterbalance spring; fixed-step
@@ -8,10 +9,8 @@
 //!   forces, each in a time window.
 //! * [`integrator`]: semi-implicit Euler (MuJoCo's scheme) and the default RK4 split,
 //!   both with implicit friction.
-//! * [`sensors`]: encoder quantisation and noise, filtered differentiation, fault
-//!   injection.
-//! * [`free_motion`]: the free-motion data format (docs/method.md section 5) and its validating
-//!   loader.
+//! * [`sensors`]: the fake encoders: quantisation and noise, fault injection, in front
+//!   of the real signal chain of `admittance_loop` (filtered differentiation).
 //!
 //! ```
 //! use admittance_dynamics::Model;
@@ -34,13 +33,11 @@
 #![allow(clippy::result_large_err)]
 #![warn(missing_docs)]
 
-mod conditioning;
 mod environment;
 mod integrator;
 mod plant;
 mod sensors;
 
-pub use conditioning::InputConditioner;
 pub use environment::{
     Anchor, Environment, EnvironmentConfig, JointSpringConfig, JointTorqueProfileConfig,
     TipForceProfileConfig, WallConfig,
@@ -53,4 +50,4 @@ pub use plant::config::{
 pub use plant::error::SimError;
 pub use plant::friction::Friction;
 pub use plant::{Plant, PlantCounters, StepRecord};
-pub use sensors::{FaultConfig, FaultKind, LowPass, Measurement, SensorConfig, Sensors};
+pub use sensors::{FaultConfig, FaultKind, SensorConfig, Sensors};

@@ -3,6 +3,7 @@
 
 mod common;
 
+use admittance_loop::Measurement;
 use admittance_sim::*;
 use common::*;
 

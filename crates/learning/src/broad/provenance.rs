@@ -111,7 +111,7 @@ impl std::fmt::Display for ValidationSplit {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DataSettings {
-    /// Cut-off (Hz) of the observer's input conditioning (`admittance_sim::InputConditioner`,
+    /// Cut-off (Hz) of the observer's input conditioning (`admittance_loop::InputConditioner`,
     /// `--input-filter-hz`, `observer.input_filter_hz`); 0: the columns as recorded. The
     /// observer must be fed the same conditioning at run time.
     pub input_filter_hz: f64,

@@ -19,11 +19,12 @@
 //! period = 4.49              # s
 //!
 //! [plant]                    # admittance_sim::PlantConfig: friction, deadzones, spring, sensors, ...
+//! # The loop (admittance_loop::LoopConfig, at plant.control_rate_hz):
 //! [controller]               # kind = "neural" | "pd" | "computed_torque", with [controller.neural] etc.
 //! [admittance]               # optional: admittance model and reference saturation
 //! [task_admittance]          # optional, instead: the hand's admittance (linear, angular, axes, IK)
-//! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz
-//! [observer.training]        # learned / hybrid: free-motion data, validation data, nodes, friction inputs, cache
+//! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz, input_filter_hz, warmup
+//! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [variants.NAME]            # overrides of any of the above, per variant
@@ -32,13 +33,12 @@
 mod arm_fit;
 pub use arm_fit::mid_range;
 mod validate;
+pub(crate) use validate::loop_problem;
 
 use std::path::{Path, PathBuf};
 
-use admittance_control::{
-    AdmittanceConfig, ComputedTorqueConfig, GrowthParams, MomentumObserverConfig,
-    NeuralControllerConfig, PdConfig, TaskSpaceAdmittanceConfig,
-};
+use admittance_control::{GrowthParams, TaskSpaceAdmittanceConfig};
+use admittance_loop::{ControllerConfig, JointAdmittanceConfig, LoopConfig, ObserverConfig};
 use serde::{Deserialize, Serialize};
 
 use admittance_sim::PlantConfig;
@@ -116,69 +116,6 @@ pub struct TrajectorySpec {
     pub sines: Vec<SineSpec>,
 }
 
-/// Which controller runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ControllerKind {
-    /// The paper's adaptive neural controller (docs/method.md section 3).
-    Neural,
-    /// Joint PD (optionally with nominal gravity compensation).
-    Pd,
-    /// Computed torque with the nominal model.
-    ComputedTorque,
-}
-
-/// The controller section: a kind and the settings of each kind (only the chosen one is
-/// used, so variants can switch kinds).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ControllerSpec {
-    /// The controller that runs.
-    pub kind: ControllerKind,
-    /// Settings of the neural controller.
-    #[serde(default)]
-    pub neural: NeuralControllerConfig,
-    /// Settings of the PD controllers.
-    #[serde(default)]
-    pub pd: Option<PdConfig>,
-    /// Settings of computed torque.
-    #[serde(default)]
-    pub computed_torque: Option<ComputedTorqueConfig>,
-    /// Whether the control law subtracts the external-torque estimate (docs/method.md section 3,
-    /// the paper's eq. 26: `tau = ... - tau_ext_hat`). Default true. With false and an
-    /// admittance model, the estimate acts only through the compliant reference
-    /// (docs/experiments.md shows both on experiment B).
-    #[serde(default = "yes")]
-    pub subtract_estimate: bool,
-}
-
-/// Where the external-torque estimate that drives the admittance model comes from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ObserverKind {
-    /// No estimate (zeros).
-    #[default]
-    None,
-    /// The true external torque of the plant (an upper bound for any observer).
-    Oracle,
-    /// The generalised-momentum observer with a nominal model (docs/method.md section 5,
-    /// baseline): settings in `[observer.momentum]`, model error in `nominal_inertia_scale`.
-    Momentum,
-    /// The paper's learned observer (eq. 19): a flat RBF network trained on free-motion
-    /// data (`[observer.training]`) predicts the free-motion torque.
-    Learned,
-    /// The momentum observer with a flat RBF network trained on what its nominal model
-    /// misses in free motion (`admittance_control::HybridObserver`).
-    Hybrid,
-}
-
-impl ObserverKind {
-    /// Whether the observer needs a trained network.
-    pub fn is_learned(self) -> bool {
-        matches!(self, ObserverKind::Learned | ObserverKind::Hybrid)
-    }
-}
-
 /// Where the training of a learned observer comes from (`[observer.training]`).
 ///
 /// The training data are free-motion samples (docs/outputs.md, "Free-motion data"): `data`
@@ -236,9 +173,6 @@ fn default_friction_scales() -> Vec<f64> {
 fn default_training_seed() -> u64 {
     admittance_learning::broad::BroadConfig::default().seed
 }
-fn default_warmup() -> f64 {
-    0.5
-}
 fn default_width_scale() -> f64 {
     2.0
 }
@@ -249,75 +183,6 @@ fn default_cache_dir() -> PathBuf {
     PathBuf::from("../.admittance-cache")
 }
 fn default_true() -> bool {
-    true
-}
-
-/// The observer section (`[observer]`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ObserverSpec {
-    /// The estimate's source.
-    #[serde(default)]
-    pub kind: ObserverKind,
-    /// The observer's nominal model is the arm's model with every link mass and inertia
-    /// multiplied by this (0.8: a 20% model error). Default 1. Used by `momentum`.
-    #[serde(default = "unit")]
-    pub nominal_inertia_scale: f64,
-    /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
-    /// but `oracle` (docs/method.md sections 5 and 7); 0 disables it. Default 0.
-    #[serde(default)]
-    pub cutoff_hz: f64,
-    /// Cut-off (Hz) of a second 2nd-order low-pass on the angles and torques every observer
-    /// but `oracle` is fed, with velocities and accelerations differentiated again after it
-    /// (`admittance_sim::InputConditioner`); the learned observers' training data pass the
-    /// same stage. 0 (default) feeds the sensors' signals as they are.
-    #[serde(default)]
-    pub input_filter_hz: f64,
-    /// Warm-up (s): the estimate of every observer but `oracle` is held at zero for this
-    /// long after the start while the observer runs, so that the start-up transients of
-    /// the sensors' and the observer's filters (the torque filters start from zero
-    /// command) do not reach the admittance model. Default 0.5 s.
-    #[serde(default = "default_warmup")]
-    pub warmup: f64,
-    /// Settings of the momentum observer (also the momentum part of `hybrid`).
-    #[serde(default)]
-    pub momentum: MomentumObserverConfig,
-    /// Training of the network (`learned`, `hybrid`).
-    #[serde(default)]
-    pub training: Option<TrainingSpec>,
-}
-
-impl Default for ObserverSpec {
-    fn default() -> Self {
-        Self {
-            kind: ObserverKind::None,
-            nominal_inertia_scale: 1.0,
-            cutoff_hz: 0.0,
-            input_filter_hz: 0.0,
-            warmup: default_warmup(),
-            momentum: MomentumObserverConfig::default(),
-            training: None,
-        }
-    }
-}
-
-fn unit() -> f64 {
-    1.0
-}
-
-/// The admittance section.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AdmittanceSpec {
-    /// Whether the reference is shaped by the admittance model (otherwise `q_r = q_d`).
-    #[serde(default = "yes")]
-    pub enabled: bool,
-    /// The model and its saturation.
-    #[serde(flatten)]
-    pub config: AdmittanceConfig,
-}
-
-fn yes() -> bool {
     true
 }
 
@@ -401,17 +266,19 @@ pub struct Scenario {
     /// The plant (true arm, friction, deadzone, environment, sensors, rates).
     #[serde(default)]
     pub plant: PlantConfig,
-    /// The controller.
-    pub controller: ControllerSpec,
-    /// The joint-space admittance model (absent: `q_r = q_d`).
+    /// The controller ([`LoopConfig::controller`]).
+    pub controller: ControllerConfig,
+    /// The joint-space admittance model ([`LoopConfig::admittance`]; absent: `q_r = q_d`).
     #[serde(default)]
-    pub admittance: Option<AdmittanceSpec>,
-    /// The task-space admittance model at the hand (exclusive with `[admittance]`).
+    pub admittance: Option<JointAdmittanceConfig>,
+    /// The task-space admittance model at the hand ([`LoopConfig::task_admittance`],
+    /// exclusive with `[admittance]`).
     #[serde(default)]
     pub task_admittance: Option<TaskSpaceAdmittanceConfig>,
-    /// The external-torque estimate.
-    #[serde(default)]
-    pub observer: ObserverSpec,
+    /// The external-torque estimate ([`LoopConfig::observer`]), with the training of the
+    /// learned observers' network.
+    #[serde(default = "ObserverConfig::default")]
+    pub observer: ObserverConfig<TrainingSpec>,
     /// Dynamic-node events (experiment C).
     #[serde(default)]
     pub dynamic_nodes: Option<DynamicNodesSpec>,
@@ -427,6 +294,22 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// The loop's settings: the scenario's `[controller]`, `[admittance]`,
+    /// `[task_admittance]` and `[observer]` tables, at the plant's control rate.
+    ///
+    /// These tables are [`LoopConfig`]'s own types, listed here one by one rather than
+    /// through `#[serde(flatten)]`: flattening buffers the values and would lose the file
+    /// position of every error inside them.
+    pub fn loop_config(&self) -> LoopConfig<TrainingSpec> {
+        LoopConfig {
+            control_rate_hz: self.plant.control_rate_hz,
+            controller: self.controller.clone(),
+            admittance: self.admittance.clone(),
+            task_admittance: self.task_admittance.clone(),
+            observer: self.observer.clone(),
+        }
+    }
+
     /// The URDF path resolved against the scenario file's directory.
     pub fn urdf_path(&self, scenario_file: &Path) -> PathBuf {
         if self.arm.urdf.is_absolute() {

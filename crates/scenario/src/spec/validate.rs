@@ -1,7 +1,9 @@
 //! Checks of a resolved scenario that serde cannot make: signs, ranges, names, and the
 //! combinations of sections.
 
-use super::{ControllerKind, Scenario};
+use admittance_loop::{ControllerKind, LoopError};
+
+use super::Scenario;
 use crate::error::Invalid;
 
 impl Scenario {
@@ -11,15 +13,9 @@ impl Scenario {
         let mut out = Vec::new();
         self.validate_times(&mut out);
         self.validate_trajectory(joints, &mut out);
-        self.validate_controller(&mut out);
+        out.extend(self.loop_config().problems().into_iter().map(loop_problem));
         self.validate_dynamic_nodes(&mut out);
-        self.validate_observer(&mut out);
-        if self.task_admittance.is_some() && self.admittance.as_ref().is_some_and(|a| a.enabled) {
-            out.push(
-                Invalid::new("task_admittance", "a scenario has one admittance model: [admittance] (joint space) or [task_admittance] (the hand), not both")
-                    .hint("remove one of the two tables, or set admittance.enabled = false"),
-            );
-        }
+        self.validate_training(&mut out);
         if self.output.decimation == 0 {
             out.push(Invalid::new("output.decimation", "must be at least 1"));
         }
@@ -115,24 +111,6 @@ impl Scenario {
         }
     }
 
-    fn validate_controller(&self, out: &mut Vec<Invalid>) {
-        match self.controller.kind {
-            ControllerKind::Pd if self.controller.pd.is_none() => out.push(
-                Invalid::new(
-                    "controller.pd",
-                    "kind = \"pd\" needs a [controller.pd] table",
-                )
-                .hint("give kp and kd"),
-            ),
-            ControllerKind::ComputedTorque if self.controller.computed_torque.is_none() => out
-                .push(Invalid::new(
-                    "controller.computed_torque",
-                    "kind = \"computed_torque\" needs a [controller.computed_torque] table",
-                )),
-            _ => {}
-        }
-    }
-
     fn validate_dynamic_nodes(&self, out: &mut Vec<Invalid>) {
         if let Some(d) = &self.dynamic_nodes {
             if self.controller.kind != ControllerKind::Neural {
@@ -186,43 +164,8 @@ impl Scenario {
         }
     }
 
-    fn validate_observer(&self, out: &mut Vec<Invalid>) {
-        if !(self.observer.nominal_inertia_scale.is_finite()
-            && self.observer.nominal_inertia_scale > 0.0)
-        {
-            out.push(Invalid::new(
-                "observer.nominal_inertia_scale",
-                format!("is {}, must be > 0", self.observer.nominal_inertia_scale),
-            ));
-        }
-        if !(self.observer.cutoff_hz.is_finite() && self.observer.cutoff_hz >= 0.0) {
-            out.push(Invalid::new(
-                "observer.cutoff_hz",
-                format!(
-                    "is {}, must be >= 0 (0: no filter)",
-                    self.observer.cutoff_hz
-                ),
-            ));
-        }
-        if !(self.observer.warmup.is_finite() && self.observer.warmup >= 0.0) {
-            out.push(Invalid::new(
-                "observer.warmup",
-                format!("is {}, must be >= 0 s", self.observer.warmup),
-            ));
-        }
-        let nyquist = 0.5 * self.plant.control_rate_hz;
-        if !(self.observer.input_filter_hz.is_finite()
-            && self.observer.input_filter_hz >= 0.0
-            && self.observer.input_filter_hz < nyquist)
-        {
-            out.push(Invalid::new(
-                "observer.input_filter_hz",
-                format!(
-                    "is {}, must be in [0, {nyquist}) Hz (0: no second filter)",
-                    self.observer.input_filter_hz
-                ),
-            ));
-        }
+    /// The scenario's own part of `[observer]`: the training of the learned observers.
+    fn validate_training(&self, out: &mut Vec<Invalid>) {
         if self.observer.kind.is_learned() {
             match &self.observer.training {
                 None => out.push(
@@ -263,5 +206,25 @@ impl Scenario {
                 }
             }
         }
+    }
+}
+
+/// A problem of the loop's settings as a scenario problem at the same key (the control
+/// rate is the plant's in a scenario file).
+pub(crate) fn loop_problem(e: LoopError) -> Invalid {
+    let key = match e.key().as_str() {
+        "control_rate_hz" => "plant.control_rate_hz".to_string(),
+        key => key.to_string(),
+    };
+    let message = match &e {
+        LoopError::Invalid { message, .. } => message.clone(),
+        other => other.to_string(),
+    };
+    let invalid = Invalid::new(key, message);
+    match e {
+        LoopError::Invalid {
+            hint: Some(hint), ..
+        } => invalid.hint(hint),
+        _ => invalid,
     }
 }

@@ -25,7 +25,9 @@ use crate::error::ScenarioError;
 use crate::progress::{RunOptions, Stage};
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
-use crate::spec::{ObserverKind, Scenario};
+use admittance_loop::ObserverKind;
+
+use crate::spec::Scenario;
 use cache::{cache_dir, entry_paths, read_cache, write_cache, CACHE_FORMAT_VERSION};
 use data::{arrays, data_source, load_data};
 

@@ -96,7 +96,7 @@ impl Default for PlantConfig {
     fn default() -> Self {
         Self {
             rate_hz: 5000.0,
-            control_rate_hz: 1000.0,
+            control_rate_hz: admittance_loop::DEFAULT_CONTROL_RATE_HZ,
             integrator: Integrator::default(),
             solver: Solver::default(),
             inertia_scale: 1.0,

@@ -17,7 +17,7 @@
 //!     tau2 = LP(tau)
 //! ```
 //!
-//! (zero derivatives until there are enough samples, as in [`crate::Sensors`]).
+//! (zero derivatives until there are enough samples, as in [`crate::SignalChain`]).
 //!
 //! Invalid samples (NaN or infinite) never enter the filters: a channel that receives one
 //! holds its last outputs, and its filter restarts at the next valid sample (steady state at
@@ -25,8 +25,8 @@
 //! burst. A channel that has had no valid sample yet outputs NaN (nothing to hold), which
 //! the observers report as a fault.
 
-use crate::plant::error::SimError;
-use crate::sensors::LowPass;
+use crate::error::LoopError;
+use crate::signal::LowPass;
 
 /// The conditioning stage; allocation-free per update.
 #[derive(Clone, Debug)]
@@ -55,7 +55,7 @@ pub struct InputConditioner {
 impl InputConditioner {
     /// For `n` joints sampled at `sample_rate_hz`, cut-off `cutoff_hz` (0 < cutoff <
     /// sample_rate / 2).
-    pub fn new(n: usize, cutoff_hz: f64, sample_rate_hz: f64) -> Result<Self, SimError> {
+    pub fn new(n: usize, cutoff_hz: f64, sample_rate_hz: f64) -> Result<Self, LoopError> {
         Ok(Self {
             q_filter: LowPass::butterworth2(cutoff_hz, sample_rate_hz, n)?,
             tau_filter: LowPass::butterworth2(cutoff_hz, sample_rate_hz, n)?,

@@ -1,5 +1,6 @@
 //! The wiring of one control period (docs/method.md sections 2-5), the only place it exists:
-//! the runner, the 1 kHz example and the Python package all step a [`ClosedLoop`].
+//! the scenario runner, the 1 kHz example (`crates/cli/examples/control_loop.rs`) and the
+//! C interface all step a [`ClosedLoop`], built by [`ClosedLoop::from_config`].
 //!
 //! ```text
 //!   measurement ──► observer (input conditioning, low-pass, warm-up) ──► tau_ext_hat
@@ -13,171 +14,10 @@
 
 use std::time::Instant;
 
-use admittance_control::{
-    Admittance, CompliantReference, ControlInput, Controller, NeuralController, Observer,
-    ObserverInput, ReferenceInput, Saturation, StepStatus, TaskSpaceAdmittance,
-};
-use admittance_sim::{InputConditioner, Measurement};
+use admittance_control::{ControlInput, NeuralController, ReferenceInput, StepStatus};
 
-/// The controller of a loop, with the neural one kept reachable for its node events.
-pub enum LoopController {
-    /// The paper's adaptive neural controller.
-    Neural(Box<NeuralController>),
-    /// Any other controller.
-    Other(Box<dyn Controller + Send>),
-}
-
-impl LoopController {
-    fn as_dyn(&mut self) -> &mut dyn Controller {
-        match self {
-            LoopController::Neural(c) => c.as_mut(),
-            LoopController::Other(c) => c.as_mut(),
-        }
-    }
-}
-
-/// An observer with what it is fed: the sensors' signals, optionally through a second
-/// conditioning stage (`observer.input_filter_hz`), its estimate low-passed and held at
-/// zero during a warm-up.
-pub struct ObserverStage {
-    observer: Box<dyn Observer + Send>,
-    conditioner: Option<InputConditioner>,
-    delayed_torque: bool,
-    previous_filtered_torque: Vec<f64>,
-    raw: Vec<f64>,
-    alpha: f64,
-    warmup: f64,
-}
-
-impl ObserverStage {
-    /// `observer` fed through `conditioner` (if any); `delayed_torque`: feed the filtered
-    /// command one sample late (the pairing with `q''` of the free-motion data the learned
-    /// networks were trained on, docs/outputs.md); the estimate is low-passed at
-    /// `cutoff_hz` (0: not filtered) at the control period `dt`, and zero before `warmup` s.
-    pub fn new(
-        observer: Box<dyn Observer + Send>,
-        conditioner: Option<InputConditioner>,
-        delayed_torque: bool,
-        cutoff_hz: f64,
-        warmup: f64,
-        dt: f64,
-    ) -> Self {
-        let n = observer.dof();
-        // First-order low-pass of the estimate: alpha = dt / (dt + 1 / (2 pi f_c)).
-        let alpha = if cutoff_hz > 0.0 {
-            dt / (dt + 1.0 / (2.0 * std::f64::consts::PI * cutoff_hz))
-        } else {
-            1.0
-        };
-        Self {
-            observer,
-            conditioner,
-            delayed_torque,
-            previous_filtered_torque: vec![0.0; n],
-            raw: vec![0.0; n],
-            alpha,
-            warmup,
-        }
-    }
-
-    /// Updates `estimate` from the measurement at `time`; false when the observer
-    /// reported a fault.
-    fn update(&mut self, time: f64, m: &Measurement, dt: f64, estimate: &mut [f64]) -> bool {
-        let tau_in: &[f64] = if self.delayed_torque {
-            &self.previous_filtered_torque
-        } else {
-            &m.tau_filtered
-        };
-        let input = match self.conditioner.as_mut() {
-            Some(c) => {
-                c.update(&m.q_filtered, tau_in);
-                ObserverInput {
-                    time,
-                    q: &c.q,
-                    qdot: &c.qdot,
-                    qddot: &c.qddot,
-                    tau_commanded: &c.tau,
-                }
-            }
-            None => ObserverInput {
-                time,
-                q: &m.q_filtered,
-                qdot: &m.qdot,
-                qddot: &m.qddot,
-                tau_commanded: tau_in,
-            },
-        };
-        let ok = self.observer.update(&input, dt, &mut self.raw).is_ok();
-        if time < self.warmup {
-            self.raw.fill(0.0);
-        }
-        for (e, r) in estimate.iter_mut().zip(&self.raw) {
-            *e += self.alpha * (r - *e);
-        }
-        self.previous_filtered_torque
-            .copy_from_slice(&m.tau_filtered);
-        ok
-    }
-}
-
-/// The admittance model that shapes the reference: joint space (docs/method.md section 2,
-/// eq. 5-7 per joint) or task space (the hand's pose, `f_ext_hat = J^{+T} tau_ext_hat`).
-#[allow(clippy::large_enum_variant)] // built once per loop
-pub enum Compliance {
-    /// `C_d (q_a' - q_d') + G_d (q_a - q_d) = tau_ext_hat`, saturated.
-    Joint(Admittance),
-    /// The hand's admittance mapped to the joints by differential inverse kinematics.
-    Task(Box<TaskSpaceAdmittance>),
-}
-
-impl Compliance {
-    fn as_dyn(&self) -> &dyn CompliantReference {
-        match self {
-            Compliance::Joint(a) => a,
-            Compliance::Task(a) => a.as_ref(),
-        }
-    }
-
-    fn as_dyn_mut(&mut self) -> &mut dyn CompliantReference {
-        match self {
-            Compliance::Joint(a) => a,
-            Compliance::Task(a) => a.as_mut(),
-        }
-    }
-
-    /// One step from the desired trajectory, the measured angles and the estimate.
-    pub fn step(&mut self, input: &ReferenceInput<'_>, dt: f64) -> StepStatus {
-        self.as_dyn_mut().step_reference(input, dt)
-    }
-
-    /// `q_r`.
-    pub fn q_r(&self) -> &[f64] {
-        self.as_dyn().q_r()
-    }
-
-    /// The reference saturation (eq. 7), if any.
-    pub fn saturation(&self) -> Option<&Saturation> {
-        self.as_dyn().saturation()
-    }
-
-    /// The task-space model, if that is the kind.
-    pub fn task_space(&self) -> Option<&TaskSpaceAdmittance> {
-        match self {
-            Compliance::Task(a) => Some(a),
-            Compliance::Joint(_) => None,
-        }
-    }
-}
-
-/// Where the external-torque estimate comes from.
-pub enum EstimateSource {
-    /// No estimate: zeros.
-    None,
-    /// The true external torque (an upper bound for any observer).
-    Oracle,
-    /// An observer.
-    Observer(Box<ObserverStage>),
-}
+use crate::parts::{Compliance, EstimateSource, LoopController};
+use crate::signal::Measurement;
 
 /// Whether the controller's law subtracts the estimate (docs/method.md section 3, eq. 26:
 /// `tau = ... - tau_ext_hat`).
@@ -218,7 +58,8 @@ pub struct LoopInput<'a> {
     pub true_external_torque: &'a [f64],
 }
 
-/// The parts of a loop, built by the scenario assembly or by hand.
+/// The parts of a loop, for one wired by hand ([`ClosedLoop::from_config`] builds them from
+/// a configuration).
 pub struct LoopParts {
     /// The controller.
     pub controller: LoopController,
@@ -249,7 +90,8 @@ pub struct ClosedLoop {
 }
 
 impl ClosedLoop {
-    /// A loop of `parts` for the controller's joint count.
+    /// A loop of `parts` for the controller's joint count (by hand; the usual builder is
+    /// [`ClosedLoop::from_config`]).
     pub fn new(mut parts: LoopParts) -> Self {
         let n = parts.controller.as_dyn().dof();
         Self {

@@ -1,0 +1,162 @@
+//! [`ClosedLoop::from_config`], the one builder of a loop from its settings: the
+//! controller, the admittance model and the estimate's source, each checked here, before
+//! the first step.
+
+use std::sync::Arc;
+
+use admittance_control::{
+    Admittance, BroadModel, ComputedTorqueController, ConfigError, HybridObserver, LearnedObserver,
+    MomentumObserver, NeuralController, Observer, PdController, TaskSpaceAdmittance,
+};
+use admittance_dynamics::Model;
+
+use crate::closed_loop::{ClosedLoop, EstimateToController, LoopParts};
+use crate::config::{ControllerConfig, ControllerKind, LoopConfig, ObserverKind};
+use crate::error::LoopError;
+use crate::parts::{Compliance, EstimateSource, LoopController};
+use crate::stage::{ObserverStage, ObserverStageSettings};
+
+impl ClosedLoop {
+    /// The loop `config` describes for the arm `model` (the controller's and the
+    /// observers' nominal model). `trained` is the network the learned observers run on
+    /// (docs/method.md section 5): for `learned` the free-motion torque from `[q, q', q'']`,
+    /// for `hybrid` what the momentum observer's nominal model misses; required by those
+    /// kinds, ignored by the others. Every problem is an error at its dotted key.
+    pub fn from_config<Training>(
+        model: &Model,
+        config: &LoopConfig<Training>,
+        trained: Option<BroadModel>,
+    ) -> Result<Self, LoopError> {
+        config.validate()?;
+        let controller = controller(Arc::new(model.clone()), &config.controller)?;
+        let admittance = config.compliance(model)?;
+        let estimate = estimate_source(model, config, trained)?;
+        Ok(ClosedLoop::new(LoopParts {
+            controller,
+            admittance,
+            estimate,
+            estimate_to_controller: if config.controller.subtract_estimate {
+                EstimateToController::Passed
+            } else {
+                EstimateToController::OnlyWithoutAdmittance
+            },
+            dt: 1.0 / config.control_rate_hz,
+        }))
+    }
+}
+
+impl<Training> LoopConfig<Training> {
+    /// The admittance model of the settings for `model`'s joints, if any (a caller that
+    /// compares the loop's reference with one driven by the true torque builds a second).
+    pub fn compliance(&self, model: &Model) -> Result<Option<Compliance>, LoopError> {
+        match (&self.admittance, &self.task_admittance) {
+            (Some(spec), _) if spec.enabled => Admittance::new(model.nq(), &spec.config)
+                .map(|a| Some(Compliance::Joint(a)))
+                .map_err(|e| component("admittance", e)),
+            (_, Some(config)) => TaskSpaceAdmittance::new(Arc::new(model.clone()), config)
+                .map(|a| Some(Compliance::Task(Box::new(a))))
+                .map_err(|e| component("task_admittance", e)),
+            _ => Ok(None),
+        }
+    }
+}
+
+fn component(section: &str, source: ConfigError) -> LoopError {
+    LoopError::Component {
+        section: section.to_string(),
+        source,
+    }
+}
+
+fn controller(nominal: Arc<Model>, c: &ControllerConfig) -> Result<LoopController, LoopError> {
+    Ok(match c.kind {
+        ControllerKind::Neural => LoopController::Neural(Box::new(
+            NeuralController::new(nominal, &c.neural)
+                .map_err(|e| component("controller.neural", e))?,
+        )),
+        ControllerKind::Pd => {
+            let cfg =
+                c.pd.as_ref()
+                    .ok_or_else(|| LoopError::invalid("controller.pd", "missing"))?;
+            LoopController::Other(Box::new(
+                PdController::new(nominal, cfg).map_err(|e| component("controller.pd", e))?,
+            ))
+        }
+        ControllerKind::ComputedTorque => {
+            let cfg = c
+                .computed_torque
+                .as_ref()
+                .ok_or_else(|| LoopError::invalid("controller.computed_torque", "missing"))?;
+            LoopController::Other(Box::new(
+                ComputedTorqueController::new(nominal, cfg)
+                    .map_err(|e| component("controller.computed_torque", e))?,
+            ))
+        }
+    })
+}
+
+fn estimate_source<Training>(
+    model: &Model,
+    config: &LoopConfig<Training>,
+    trained: Option<BroadModel>,
+) -> Result<EstimateSource, LoopError> {
+    let spec = &config.observer;
+    let observer = match observer(model, config, trained)? {
+        None if spec.kind == ObserverKind::Oracle => return Ok(EstimateSource::Oracle),
+        None => return Ok(EstimateSource::None),
+        Some(observer) => observer,
+    };
+    let settings = ObserverStageSettings {
+        input_filter_hz: spec.input_filter_hz,
+        cutoff_hz: spec.cutoff_hz,
+        warmup: spec.warmup,
+        // The learned networks were trained on the filtered command one sample late
+        // (the pairing with q'' of the free-motion data, docs/outputs.md).
+        delayed_torque: spec.kind.is_learned(),
+        rate_hz: config.control_rate_hz,
+    };
+    Ok(EstimateSource::Observer(Box::new(ObserverStage::new(
+        observer, &settings,
+    )?)))
+}
+
+/// The external-torque observer (docs/method.md section 5); `None` for `none` and `oracle`.
+fn observer<Training>(
+    model: &Model,
+    config: &LoopConfig<Training>,
+    trained: Option<BroadModel>,
+) -> Result<Option<Box<dyn Observer + Send>>, LoopError> {
+    let spec = &config.observer;
+    let momentum_err =
+        |e: ConfigError| LoopError::invalid(format!("observer.momentum.{}", e.key), e.message);
+    let momentum = || {
+        let nominal = model
+            .with_scaled_inertias(spec.nominal_inertia_scale)
+            .map_err(|e| LoopError::invalid("observer.nominal_inertia_scale", e.to_string()))?;
+        MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)
+    };
+    let network = || {
+        trained.ok_or_else(|| {
+            LoopError::invalid(
+                "observer.kind",
+                "a learned observer needs its trained network",
+            )
+            .hint("train it first: the scenario runner does, from [observer.training]")
+        })
+    };
+    let network_err = |e: ConfigError| LoopError::invalid("observer.training", e.to_string());
+    Ok(match spec.kind {
+        ObserverKind::None | ObserverKind::Oracle => None,
+        ObserverKind::Momentum => Some(Box::new(momentum()?)),
+        ObserverKind::Hybrid => {
+            let network = network()?;
+            Some(Box::new(
+                HybridObserver::new(momentum()?, network).map_err(network_err)?,
+            ))
+        }
+        // The loop low-passes every estimate (observer.cutoff_hz): none inside.
+        ObserverKind::Learned => Some(Box::new(
+            LearnedObserver::new(network()?, 0.0).map_err(network_err)?,
+        )),
+    })
+}

@@ -1,0 +1,120 @@
+//! The observer stage of a loop (docs/method.md sections 5 and 7): the observer fed the
+//! sensors' signals, optionally through a second conditioning stage, its estimate
+//! low-passed and held at zero during a warm-up.
+
+use admittance_control::{Observer, ObserverInput};
+
+use crate::conditioning::InputConditioner;
+use crate::error::LoopError;
+use crate::signal::Measurement;
+
+/// An observer with what it is fed: the sensors' signals, optionally through a second
+/// conditioning stage (`observer.input_filter_hz`), its estimate low-passed and held at
+/// zero during a warm-up.
+pub struct ObserverStage {
+    observer: Box<dyn Observer + Send>,
+    conditioner: Option<InputConditioner>,
+    delayed_torque: bool,
+    previous_filtered_torque: Vec<f64>,
+    raw: Vec<f64>,
+    alpha: f64,
+    warmup: f64,
+}
+
+/// How an [`ObserverStage`] feeds its observer and shapes its estimate (the `[observer]`
+/// settings of a [`crate::LoopConfig`], resolved).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObserverStageSettings {
+    /// Cut-off (Hz) of the second 2nd-order low-pass on the observer's inputs
+    /// ([`InputConditioner`]); 0: the sensors' signals as they are.
+    pub input_filter_hz: f64,
+    /// Cut-off (Hz) of the first-order low-pass of the estimate; 0: not filtered.
+    pub cutoff_hz: f64,
+    /// Warm-up (s): the estimate is zero before this time.
+    pub warmup: f64,
+    /// Feed the filtered command one sample late (the pairing with `q''` of the
+    /// free-motion data the learned networks were trained on, docs/outputs.md).
+    pub delayed_torque: bool,
+    /// Control rate (Hz): one update per period `1 / rate_hz`.
+    pub rate_hz: f64,
+}
+
+impl ObserverStage {
+    /// `observer` fed and filtered as `settings` say; an error (at
+    /// `observer.input_filter_hz`) when the input filter does not fit the rate.
+    pub fn new(
+        observer: Box<dyn Observer + Send>,
+        settings: &ObserverStageSettings,
+    ) -> Result<Self, LoopError> {
+        let n = observer.dof();
+        let conditioner = if settings.input_filter_hz > 0.0 {
+            let c = InputConditioner::new(n, settings.input_filter_hz, settings.rate_hz)
+                .map_err(|e| LoopError::invalid("observer.input_filter_hz", e.to_string()))?;
+            Some(c)
+        } else {
+            None
+        };
+        let dt = 1.0 / settings.rate_hz;
+        let cutoff_hz = settings.cutoff_hz;
+        // First-order low-pass of the estimate: alpha = dt / (dt + 1 / (2 pi f_c)).
+        let alpha = if cutoff_hz > 0.0 {
+            dt / (dt + 1.0 / (2.0 * std::f64::consts::PI * cutoff_hz))
+        } else {
+            1.0
+        };
+        Ok(Self {
+            observer,
+            conditioner,
+            delayed_torque: settings.delayed_torque,
+            previous_filtered_torque: vec![0.0; n],
+            raw: vec![0.0; n],
+            alpha,
+            warmup: settings.warmup,
+        })
+    }
+
+    /// Updates `estimate` from the measurement at `time`; false when the observer
+    /// reported a fault.
+    pub(crate) fn update(
+        &mut self,
+        time: f64,
+        m: &Measurement,
+        dt: f64,
+        estimate: &mut [f64],
+    ) -> bool {
+        let tau_in: &[f64] = if self.delayed_torque {
+            &self.previous_filtered_torque
+        } else {
+            &m.tau_filtered
+        };
+        let input = match self.conditioner.as_mut() {
+            Some(c) => {
+                c.update(&m.q_filtered, tau_in);
+                ObserverInput {
+                    time,
+                    q: &c.q,
+                    qdot: &c.qdot,
+                    qddot: &c.qddot,
+                    tau_commanded: &c.tau,
+                }
+            }
+            None => ObserverInput {
+                time,
+                q: &m.q_filtered,
+                qdot: &m.qdot,
+                qddot: &m.qddot,
+                tau_commanded: tau_in,
+            },
+        };
+        let ok = self.observer.update(&input, dt, &mut self.raw).is_ok();
+        if time < self.warmup {
+            self.raw.fill(0.0);
+        }
+        for (e, r) in estimate.iter_mut().zip(&self.raw) {
+            *e += self.alpha * (r - *e);
+        }
+        self.previous_filtered_torque
+            .copy_from_slice(&m.tau_filtered);
+        ok
+    }
+}
