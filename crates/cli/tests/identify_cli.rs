@@ -213,3 +213,83 @@ fn real_baxter_held_out_meets_the_bar() {
         );
     }
 }
+
+#[test]
+fn a_scenario_runs_its_momentum_observer_on_an_identification() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let train = synthetic_csv(dir.path(), 0.7, 20.0);
+    let ident = dir.path().join("baxter.ident.json");
+    let o = admittance(&[
+        "identify",
+        "--data",
+        train.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--out",
+        ident.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let scenario = root().join("scenarios/admittance.toml");
+    let set = format!("observer.identification=\"{}\"", ident.display());
+    let out = dir.path().join("run");
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        &set,
+        "--set",
+        "duration=3",
+        "--set",
+        "evaluation_start=1",
+        "--set",
+        "observer.nominal_inertia_scale=1",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("momentum"), "{summary}");
+    assert!(std::fs::read_to_string(out.join("scenario.toml"))
+        .unwrap()
+        .contains("identification"));
+    // The hybrid would need a network trained on the identification's residual: refused,
+    // naming the key, before any training.
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "hybrid",
+        "--set",
+        &set,
+        "--set",
+        "duration=3",
+        "--out",
+        dir.path().join("run2").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("observer.identification"), "{}", text(&o));
+    // Another arm's identification is refused at the same key.
+    let panda_ident = dir.path().join("missing.ident.json");
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        &format!("observer.identification=\"{}\"", panda_ident.display()),
+        "--set",
+        "duration=3",
+        "--set",
+        "observer.nominal_inertia_scale=1",
+        "--out",
+        dir.path().join("run3").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("observer.identification"), "{}", text(&o));
+}

@@ -130,6 +130,12 @@ fn observer<Training>(
     let momentum_err =
         |e: ConfigError| LoopError::invalid(format!("observer.momentum.{}", e.key), e.message);
     let momentum = || {
+        if let Some(path) = &spec.identification {
+            let ident = admittance_dynamics::Identification::load(path, model)
+                .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?;
+            return MomentumObserver::from_identification(&ident, &spec.momentum)
+                .map_err(momentum_err);
+        }
         let nominal = model
             .with_scaled_inertias(spec.nominal_inertia_scale)
             .map_err(|e| LoopError::invalid("observer.nominal_inertia_scale", e.to_string()))?;

@@ -157,6 +157,13 @@ pub struct ObserverConfig<Training = NoTraining> {
     /// `hybrid`.
     #[serde(default = "unit")]
     pub nominal_inertia_scale: f64,
+    /// An identification file of this arm (`admittance identify`, docs/outputs.md): the
+    /// momentum observer runs on the identified model with its joint terms (docs/method.md
+    /// section 8) instead of the URDF. Default: absent. Used by `momentum`; with it
+    /// `nominal_inertia_scale` must stay 1. A relative path is taken from the scenario
+    /// file's folder (by the scenario runner) or the working directory.
+    #[serde(default)]
+    pub identification: Option<std::path::PathBuf>,
     /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
     /// but `oracle` (docs/method.md sections 5 and 7); 0 disables it. Default 0.
     #[serde(default)]
@@ -189,6 +196,7 @@ impl<Training> Default for ObserverConfig<Training> {
         Self {
             kind: ObserverKind::None,
             nominal_inertia_scale: unit(),
+            identification: None,
             cutoff_hz: 0.0,
             input_filter_hz: 0.0,
             warmup: default_warmup(),

@@ -1,7 +1,7 @@
 //! The checks of a [`LoopConfig`] that serde cannot make (signs, ranges, combinations),
 //! made once, each problem at its dotted key.
 
-use crate::config::{ControllerKind, LoopConfig};
+use crate::config::{ControllerKind, LoopConfig, ObserverKind};
 use crate::error::LoopError;
 
 impl<Training> LoopConfig<Training> {
@@ -59,6 +59,23 @@ impl<Training> LoopConfig<Training> {
                 "observer.nominal_inertia_scale",
                 format!("is {}, must be > 0", o.nominal_inertia_scale),
             ));
+        }
+        if o.identification.is_some() {
+            if o.kind != ObserverKind::Momentum {
+                out.push(
+                    LoopError::invalid(
+                        "observer.identification",
+                        format!("is used by kind = \"momentum\" only, not {:?}", o.kind),
+                    )
+                    .hint("a hybrid's network on an identification is trained with `admittance train --nominal`; run it from Python or the CLI"),
+                );
+            }
+            if o.nominal_inertia_scale != 1.0 {
+                out.push(LoopError::invalid(
+                    "observer.nominal_inertia_scale",
+                    "must be 1 with observer.identification (the identified model is the nominal one)",
+                ));
+            }
         }
         if !(o.cutoff_hz.is_finite() && o.cutoff_hz >= 0.0) {
             out.push(LoopError::invalid(

@@ -84,7 +84,7 @@ pub(crate) fn assemble(
     let plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
     let sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
         .map_err(sim_err)?;
-    let loop_config = scenario.loop_config();
+    let loop_config = scenario.loop_config_for(path);
     let oracle_admittance = loop_config
         .compliance(&model)
         .map_err(|e| loop_err(&ctx, e))?;

@@ -310,6 +310,18 @@ impl Scenario {
         }
     }
 
+    /// [`Scenario::loop_config`] with the files it names (`observer.identification`)
+    /// resolved against the scenario file's folder.
+    pub fn loop_config_for(&self, scenario_file: &Path) -> LoopConfig<TrainingSpec> {
+        let mut config = self.loop_config();
+        if let Some(p) = &mut config.observer.identification {
+            if p.is_relative() {
+                *p = scenario_file.parent().unwrap_or(Path::new(".")).join(&*p);
+            }
+        }
+        config
+    }
+
     /// The URDF path resolved against the scenario file's directory.
     pub fn urdf_path(&self, scenario_file: &Path) -> PathBuf {
         if self.arm.urdf.is_absolute() {
