@@ -14,6 +14,7 @@
 #![warn(missing_docs)]
 
 mod admittance;
+mod bag;
 mod config;
 mod control;
 mod convert;
@@ -44,6 +45,7 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(identification::identify, m)?,
         wrap_pyfunction!(identification::load_identification, m)?,
         wrap_pyfunction!(identification::excitation, m)?,
+        wrap_pyfunction!(bag::import_bag, m)?,
     ] {
         m.add_function(f)?;
     }

@@ -137,3 +137,16 @@ def test_excitation_is_inside_the_limits_and_identifies(baxter):
     tau = torques(baxter, e["q"], e["qdot"], e["qddot"], friction)
     ident = adm.identify({**e, "tau": tau}, baxter)
     assert max(ident.summary["expected_false_torque_rms"]) < 0.05
+
+
+BAGS = pathlib.Path(__file__).resolve().parents[2] / "bag" / "tests" / "data"
+
+
+def test_import_bag_gives_the_free_motion_dict():
+    d = adm.import_bag(BAGS / "franka_zstd", "franka")
+    n = len(d["joints"])
+    assert n == 7 and d["q"].shape == (len(d["t"]), n) and d["tau"].shape == d["q"].shape
+    assert np.all(np.diff(d["t"]) > 0) and "label" in d
+    assert "topics:" in d["report"]
+    with pytest.raises(ValueError, match="rosbags-convert"):
+        adm.import_bag(BAGS / "franka_sqlite", "franka")

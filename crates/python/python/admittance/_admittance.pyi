@@ -432,6 +432,10 @@ def excitation(
     """A motion for identification (``admittance excite``): dict of ``t`` ``(N,)``, ``q``,
     ``qdot``, ``qddot`` ``(N, n)`` inside the arm's limits, and ``condition_number``."""
 
+def import_bag(path: StrPath, profile: str, rate: Optional[float] = None) -> Dict[str, Any]:
+    """A rosbag2 MCAP recording (``admittance import``) as the free-motion dict ``t``, ``q``,
+    ``qdot``, ``qddot``, ``tau`` (and the vendor's ``label`` when recorded), with ``report``."""
+
 def load_identification(path: StrPath, m: Optional[Model] = None) -> Identification:
     """Reads an identification file with the URDF it names (or applied to ``m``)."""
 
