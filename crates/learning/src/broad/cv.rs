@@ -7,7 +7,8 @@
 //! `G_k = A_k^T A_k`, `A_k^T Y_k` and the target sums; the total is their sum. For every
 //! candidate lambda and every stretch k the fit on the others solves
 //! `(G - G_k + lambda_k D) W_k = A^T Y - A_k^T Y_k` (`lambda_k = lambda_rel (N - N_k)`)
-//! and its error on stretch k comes from the stretch's own Gram terms,
+//! and its error on stretch k comes from the stretch's own Gram terms (as
+//! `solve.rs`'s `sse_from_gram`),
 //! `||Y_k - A_k W_k||^2 = Y_k^T Y_k - 2 W_k^T A_k^T Y_k + W_k^T G_k W_k`, without a second
 //! pass over the data. Cost: K passes that together equal one, and K factorisations per
 //! candidate.
@@ -18,8 +19,9 @@ use super::error::BroadError;
 use super::features::FeatureMap;
 use super::gram::{accumulate_gram, GramAcc};
 use super::model::nrmse;
-use super::solve::{factor, solve, sse_from_gram};
-use faer::{Mat, Par};
+use super::solve::{factor, solve};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
 
 /// The contiguous stretches `[start, end)` of `n` rows cut into `folds` nearly equal
 /// parts (the first `n % folds` one row longer).
@@ -119,6 +121,7 @@ pub(crate) fn cross_validate(
     for (fold, &rows) in fg.folds.iter().zip(&fg.rows) {
         let mut rest = fg.total.clone();
         add_into(&mut rest, fold, -1.0);
+        let g_full = symmetric(fold.g.as_ref());
         for (c, &rel) in grid.iter().enumerate() {
             let Some(sum) = sse[c].as_mut() else {
                 continue;
@@ -128,13 +131,38 @@ pub(crate) fn cross_validate(
                 continue;
             };
             let w: Mat<f64> = solve(l.as_ref(), rest.aty.as_ref(), par);
-            let e = sse_from_gram(fold.g.as_ref(), fold.aty.as_ref(), &fold.y_sq, w.as_ref());
+            let e = held_out_sse(&g_full, fold, w.as_ref(), par);
             sum.iter_mut().zip(&e).for_each(|(s, v)| *s += v);
         }
     }
     let std = acc_std(&fg.total, n);
     sse.into_iter()
         .map(|s| s.map(|s| nrmse(&s, n, &std)))
+        .collect()
+}
+
+/// The symmetric matrix whose lower triangle is `lower`'s.
+fn symmetric(lower: MatRef<'_, f64>) -> Mat<f64> {
+    Mat::from_fn(lower.nrows(), lower.ncols(), |i, j| {
+        lower[(i.max(j), i.min(j))]
+    })
+}
+
+/// Per-output squared error of the weights `w` on a stretch from its Gram terms,
+/// `y^T y - 2 w^T A^T y + w^T G w` (`g_full`: the stretch's G, both triangles), as
+/// [`sse_from_gram`] but with one matrix product for `G W`.
+fn held_out_sse(g_full: &Mat<f64>, fold: &GramAcc, w: MatRef<'_, f64>, par: Par) -> Vec<f64> {
+    let mut gw = Mat::<f64>::zeros(w.nrows(), w.ncols());
+    matmul(gw.as_mut(), Accum::Replace, g_full.as_ref(), w, 1.0, par);
+    (0..w.ncols())
+        .map(|o| {
+            let (mut wgw, mut way) = (0.0, 0.0);
+            for j in 0..w.nrows() {
+                wgw += w[(j, o)] * gw[(j, o)];
+                way += w[(j, o)] * fold.aty[(j, o)];
+            }
+            (fold.y_sq[o] - 2.0 * way + wgw).max(0.0)
+        })
         .collect()
 }
 
