@@ -1,9 +1,13 @@
 //! `admittance train` and `admittance grow`: the flat RBF network of the learned observer
 //! (docs/method.md section 5) from free-motion data (docs/outputs.md, "Free-motion data").
 //!
-//! Inputs `[q, qdot, qddot]`, targets `tau`. The last `--validation-fraction` of the rows
-//! (by time, default 20%) is held out: lambda is chosen on it (the broad module's grid) and
-//! the printed validation NRMSE is measured on it. The model file records the arm (joint
+//! Inputs `[q, qdot, qddot]`, targets `tau` (or, with `--nominal FILE`, what an
+//! identification file explains not: `tau - ident.predict(q, qdot, qddot)`). The ridge
+//! parameter is chosen, and the printed validation error measured, on motion the fit did
+//! not see (issue #22): a separate recording (`--validation FILE`), else blocked
+//! cross-validation over `--folds` contiguous stretches of the rows (default 5); the
+//! network is then fitted on every row. `--validation-fraction F` (the last rows, the tail
+//! of the same motion) is kept for compatibility only. The model file records the arm (joint
 //! names, the URDF model's fingerprint) and every setting (docs/outputs.md, "Model
 //! files"); `grow` takes the settings from it and refuses another arm or data that are
 //! not the training data. Before any work: the arguments, `--out`, and the memory and work
@@ -27,7 +31,7 @@ use clap::Args;
 use crate::progress::{self, Spinner};
 use crate::CliError;
 use args::{
-    arm_identity, check_out, learn_error, open_fraction, positive_count, BudgetArgs,
+    arm_identity, check_out, fold_count, learn_error, open_fraction, positive_count, BudgetArgs,
     OptionalArmArgs,
 };
 
@@ -52,9 +56,23 @@ pub struct TrainArgs {
     /// The observer must be fed the same conditioning at run time (`admittance_loop::InputConditioner`).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
     input_filter_hz: f64,
-    /// Fraction of the rows, at the end, held out for validation.
-    #[arg(long, default_value_t = 0.2, value_parser = open_fraction, allow_negative_numbers = true)]
-    validation_fraction: f64,
+    /// A separate free-motion recording (another motion, same columns) that chooses the
+    /// ridge parameter and measures the validation error; every row of --data trains.
+    #[arg(long, conflicts_with_all = ["validation_fraction", "folds"])]
+    validation: Option<PathBuf>,
+    /// Without --validation: contiguous stretches of the rows for blocked
+    /// cross-validation (each scored by a fit on the others; at least 2).
+    #[arg(long, default_value_t = 5, value_parser = fold_count)]
+    folds: usize,
+    /// Hold out the last fraction of the rows instead (the tail of the same motion: it
+    /// underestimates the error on new motion; kept for compatibility).
+    #[arg(long, value_parser = open_fraction, allow_negative_numbers = true, conflicts_with = "folds")]
+    validation_fraction: Option<f64>,
+    /// An identification file (`admittance identify`) of this arm: the network learns what
+    /// it does not explain, `tau - ident.predict(q, qdot, qddot)` (the hybrid observer's
+    /// residual network).
+    #[arg(long)]
+    nominal: Option<PathBuf>,
     /// Seed of the centre placement.
     #[arg(long)]
     seed: Option<u64>,
@@ -89,6 +107,10 @@ pub struct GrowArgs {
     input_filter_hz: Option<f64>,
     #[command(flatten)]
     arm: OptionalArmArgs,
+    /// The identification file `train --nominal` used (needed when the model learned an
+    /// identified model's residual; checked against the checksum the model records).
+    #[arg(long)]
+    nominal: Option<PathBuf>,
     /// Seed of the new centres.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -122,13 +144,47 @@ fn with_progress<T>(quiet: bool, what: String, work: impl FnOnce() -> T) -> (T, 
     (out, started.elapsed().as_secs_f64())
 }
 
+/// How the ridge parameter is validated, from the flags.
+fn validation_split(args: &TrainArgs) -> ValidationSplit {
+    match (&args.validation, args.validation_fraction) {
+        (Some(_), _) => ValidationSplit::SeparateData,
+        (None, Some(fraction)) => ValidationSplit::TrailingFraction { fraction },
+        (None, None) => ValidationSplit::BlockedCrossValidation { folds: args.folds },
+    }
+}
+
+/// Inputs and targets of `path` for `joints` (conditioned, minus the identified model).
+fn target_arrays(
+    path: &std::path::Path,
+    joints: &[String],
+    filter_hz: f64,
+    ident: Option<&admittance_dynamics::Identification>,
+) -> Result<(admittance_scenario::FreeMotionData, Vec<f64>, Vec<f64>), CliError> {
+    let data = data::load(path, Some(joints))?;
+    let (x, mut y) = data::arrays(path, &data, filter_hz, None)?;
+    if let Some(id) = ident {
+        data::subtract_identified(id, &x, &mut y)?;
+    }
+    Ok((data, x, y))
+}
+
 pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     check_out(&args.out)?;
     let arm = crate::dynamics_cmd::load(&args.chain)?;
     let joints: Vec<String> = arm.joint_names().map(String::from).collect();
-    let data = data::load(&args.data, Some(&joints))?;
+    let ident = match &args.nominal {
+        Some(p) => Some(data::identification(p, &arm)?),
+        None => None,
+    };
+    let id = ident.as_ref().map(|(i, _)| i);
+    let filter = args.input_filter_hz;
+    let (data, x, y) = target_arrays(&args.data, &joints, filter, id)?;
     let n = data.dof();
-    let train_rows = data::training_rows(&args.data, &data, Some(args.validation_fraction))?;
+    let train_rows = data::training_rows(&args.data, &data, args.validation_fraction)?;
+    let separate = match &args.validation {
+        Some(p) => Some((p, target_arrays(p, &joints, filter, id)?)),
+        None => None,
+    };
     let mut config = BroadConfig {
         nodes: args.nodes,
         friction: if args.friction_features {
@@ -136,25 +192,26 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         } else {
             FrictionFeatures::none()
         },
+        cv_folds: args.folds,
         budget: args.budget.budget(),
         ..BroadConfig::default()
     };
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    let held_out = data.len() - train_rows;
+    let held_out = match &separate {
+        Some((_, (v, _, _))) => v.len(),
+        None => data.len() - train_rows,
+    };
     let size = FitSize::fit(train_rows, held_out, 3 * n, n, &config);
     let estimate = check_budget(&size, &config.budget).map_err(learn_error)?;
-    let (x, y) = data::arrays(&args.data, &data, args.input_filter_hz, None)?;
-    let (train, validation) = data::datasets(
-        &args.data,
-        &data,
-        (&x, &y),
-        train_rows,
-        args.input_filter_hz,
-    )?;
+    let (train, mut validation) = data::datasets(&args.data, &data, (&x, &y), train_rows, filter)?;
+    if let Some((p, (v, xv, yv))) = &separate {
+        validation = Some(data::datasets(p, v, (xv, yv), v.len(), filter)?.0);
+    }
+    let split = validation_split(args);
     let what = format!(
-        "training on {train_rows} rows ({held_out} held out), {} nodes: {}",
+        "training on {train_rows} rows (validation on {split}), {} nodes: {}",
         args.nodes, estimate
     );
     let (result, seconds) = with_progress(args.quiet, what, || {
@@ -163,23 +220,33 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     let (mut net, report) = result.map_err(learn_error)?;
     net.set_arm(arm_identity(&arm)).map_err(learn_error)?;
     net.set_data_settings(DataSettings {
-        input_filter_hz: args.input_filter_hz,
-        validation: ValidationSplit::TrailingFraction {
-            fraction: args.validation_fraction,
+        input_filter_hz: filter,
+        validation: split,
+        target: match &ident {
+            Some((_, checksum)) => TrainingTarget::IdentifiedResidual {
+                checksum: *checksum,
+            },
+            None => TrainingTarget::FreeMotionTorque,
         },
-        target: TrainingTarget::FreeMotionTorque,
     })
     .map_err(learn_error)?;
     net.save(&args.out).map_err(learn_error)?;
     crate::write_stdout(&format!(
-        "samples: {}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nwrote {}\n",
+        "samples: {}\nvalidation: {split}{}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nexpected false torque on unseen motion (rms, N m): [{}]\ncoverage threshold: {}\nwrote {}\n",
         report.samples,
+        if report.cv_folds > 0 {
+            " (every row scored by a fit on the other stretches)"
+        } else {
+            ""
+        },
         report.validation_samples,
         report.nodes,
         report.lambda,
         report.lambda_rel,
         seconds,
         fmt_list(&report.validation_nrmse),
+        fmt_list(&report.validation_rmse),
+        net.coverage_threshold().map_or("none".into(), |t| format!("{t:.4}")),
         args.out.display()
     ));
     Ok(())
@@ -233,6 +300,38 @@ fn grow_settings(args: &GrowArgs, net: &BroadModel) -> Result<DataSettings, CliE
     }
 }
 
+/// The identification whose residual the model learned (`--nominal`, checked against the
+/// recorded checksum), or `None` for another target (where `--nominal` is an error).
+fn grow_identification(
+    args: &GrowArgs,
+    settings: &DataSettings,
+    urdf: Option<&admittance_dynamics::Model>,
+) -> Result<Option<admittance_dynamics::Identification>, CliError> {
+    let model = args.model.display();
+    let TrainingTarget::IdentifiedResidual { checksum } = settings.target else {
+        return match &args.nominal {
+            Some(_) => Err(CliError::usage(format!(
+                "--nominal: {model} learned {}, not an identified model's residual",
+                settings.target
+            ))),
+            None => Ok(None),
+        };
+    };
+    let (Some(path), Some(arm)) = (&args.nominal, urdf) else {
+        return Err(CliError::usage(format!(
+            "{model} learned an identified model's residual: give its identification file with --nominal and the arm with --urdf"
+        )));
+    };
+    let (ident, found) = data::identification(path, arm)?;
+    if found != checksum {
+        return Err(CliError::input(format!(
+            "{}: checksum {found:016x}, but {model} learned the residual of the identification with checksum {checksum:016x}",
+            path.display()
+        )));
+    }
+    Ok(Some(ident))
+}
+
 /// The model's arm checked against `--urdf` (when given) and the joints to read from the
 /// data: the recorded ones, else the URDF's, else the file's `q.*` order.
 fn grow_joints(
@@ -281,8 +380,9 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
             n
         )));
     }
+    let ident = grow_identification(args, &settings, urdf.as_ref())?;
     let nominal = match settings.target {
-        TrainingTarget::FreeMotionTorque => None,
+        TrainingTarget::FreeMotionTorque | TrainingTarget::IdentifiedResidual { .. } => None,
         TrainingTarget::NominalResidual {
             nominal_inertia_scale,
         } => {
@@ -300,7 +400,9 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
     };
     let fraction = match settings.validation {
         ValidationSplit::TrailingFraction { fraction } => Some(fraction),
-        ValidationSplit::SeparateData | ValidationSplit::NoValidation => None,
+        ValidationSplit::SeparateData
+        | ValidationSplit::NoValidation
+        | ValidationSplit::BlockedCrossValidation { .. } => None,
     };
     let train_rows = data::training_rows(&args.data, &data, fraction)?;
     let mut config = BroadConfig {
@@ -325,12 +427,15 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
         &config,
     );
     let estimate = check_budget(&size, &config.budget).map_err(learn_error)?;
-    let (x, y) = data::arrays(
+    let (x, mut y) = data::arrays(
         &args.data,
         &data,
         settings.input_filter_hz,
         nominal.as_ref(),
     )?;
+    if let Some(id) = &ident {
+        data::subtract_identified(id, &x, &mut y)?;
+    }
     let (train, validation) = data::datasets(
         &args.data,
         &data,

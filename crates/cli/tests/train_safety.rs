@@ -116,7 +116,10 @@ fn grow_takes_the_settings_from_the_model_file() {
     );
     let (code, _, err) = grow(&model, &data, &grown, &["--validation-fraction", "0.3"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("last 0.2 of the rows"), "{err}");
+    assert!(
+        err.contains("blocked cross-validation over 5 stretches"),
+        "{err}"
+    );
     // The file records the arm and the settings.
     let bytes = std::fs::read(&grown).unwrap();
     let h_len = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
@@ -125,7 +128,11 @@ fn grow_takes_the_settings_from_the_model_file() {
     assert_eq!(header["arm"]["joints"][0], "left_s0");
     assert_eq!(header["arm"]["fingerprint"].as_str().unwrap().len(), 16);
     assert_eq!(header["data"]["input_filter_hz"], 10.0);
-    assert_eq!(header["data"]["validation"]["fraction"], 0.2);
+    assert_eq!(
+        header["data"]["validation"]["kind"],
+        "blocked_cross_validation"
+    );
+    assert_eq!(header["data"]["validation"]["folds"], 5);
     assert_eq!(header["data"]["target"]["kind"], "free_motion_torque");
     assert_eq!(header["growth"][0]["nodes_added"], 5);
     assert_eq!(header["fit"]["nodes"], 20);
@@ -260,7 +267,7 @@ fn requests_that_cannot_fit_are_refused_at_once_with_the_figure() {
         assert_eq!(code, 2, "{nodes}: {err}");
         assert!(
             err.contains(&format!(
-                "{nodes} nodes need at least as many training rows, the data have 1600"
+                "{nodes} nodes need at least as many training rows, the data have 2000"
             )),
             "{err}"
         );

@@ -19,7 +19,9 @@
 //! * Incremental growth by k nodes ([`BroadModel::grow`]): only the new Gram rows are
 //!   computed, the Cholesky factor is extended by a Schur-complement block. The paper's
 //!   Greville pseudo-inverse form is [`greville_add_columns`] (small problems).
-//! * Allocation-free one-sample prediction ([`BroadModel::predict_into`]).
+//! * Allocation-free one-sample prediction ([`BroadModel::predict_into`]), and the
+//!   coverage of an input by the training data with the prediction faded to zero outside
+//!   it ([`BroadModel::coverage`], [`BroadModel::predict_faded_into`], `coverage.rs`).
 //! * Versioned, checksummed, atomically written model files ([`BroadModel::save`],
 //!   [`BroadModel::load`]) that know the arm they were trained for and every setting that
 //!   made them ([`Provenance`], [`BroadModel::check_arm`]), written only to a new name or
@@ -47,7 +49,10 @@
 //! * **Lambda**: a grid of relative values (`lambda = lambda_rel * N`, default
 //!   1e-10 .. 1e-2); one Gram accumulation, one Cholesky solve per candidate, one blocked
 //!   pass over the validation set predicting with all candidates at once; the candidate
-//!   with the smallest mean (over outputs) validation NRMSE wins.
+//!   with the smallest mean (over outputs) validation NRMSE wins. Without a validation
+//!   set, blocked cross-validation over `cv_folds` contiguous stretches of the training
+//!   rows (default 5, `cv.rs`): each stretch scored by a fit on the others, from
+//!   per-stretch Gram terms (never the tail of the same motion, issue #22).
 //! * **Gram**: row blocks of `block_rows` rows (default 2048; at most 256 on the packed
 //!   path below, so that a block stays in cache); each worker thread forms the block's
 //!   pattern (the Gaussian distances by one product, `||x||^2 + ||u||^2 - 2 X U^T`, then
@@ -66,6 +71,8 @@
 mod budget;
 mod centres;
 mod config;
+mod coverage;
+mod cv;
 mod data;
 mod destination;
 mod error;
@@ -85,6 +92,7 @@ pub use budget::{
     DEFAULT_MAX_MEMORY_BYTES,
 };
 pub use config::{BroadConfig, FrictionFeatures, GramStrategy, WidthRule};
+pub use coverage::COVERAGE_QUANTILE;
 pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
 pub use destination::check_model_destination;
 pub use error::BroadError;

@@ -389,6 +389,7 @@ fn bad_inputs_are_errors_not_panics() {
     // Configuration.
     let train = Dataset::new(&x, &y, 3, 2).unwrap();
     let mut cfg = small_config(10);
+    cfg.cv_folds = 0;
     assert!(matches!(
         fit(&train, None, &cfg),
         Err(BroadError::NeedValidation(4))

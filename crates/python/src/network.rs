@@ -1,9 +1,10 @@
 //! The learned observer's network (docs/method.md section 5): `train`, `Network` (`grow`,
 //! `predict`, `save`) and `load_network`, as `admittance train` / `admittance grow` do it
 //! (crates/cli/src/train_cmd.rs): free-motion data from a CSV file or a dict of arrays,
-//! inputs `[q, qdot, qddot]` through the optional input conditioning, the last
-//! `validation_fraction` of the rows held out (or a separate validation set), the
-//! ridge parameter chosen on the validation rows. The GIL is released while files are read
+//! inputs `[q, qdot, qddot]` through the optional input conditioning, the ridge parameter
+//! chosen on a separate validation set when given, else by blocked cross-validation over
+//! `folds` contiguous stretches of the rows (issue #22: never the tail of the same
+//! motion; `validation_fraction`, the last rows held out, is kept for compatibility). The GIL is released while files are read
 //! and while the network is fitted, grown or evaluated.
 
 use std::path::PathBuf;
@@ -11,7 +12,7 @@ use std::sync::Arc;
 
 use admittance_dynamics::Identification;
 use admittance_learning::broad::{
-    fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec, WidthRule,
+    fit, BroadConfig, BroadModel, Dataset, FrictionFeatures, GrowthSpec, ValidationSplit, WidthRule,
 };
 use admittance_scenario::FreeMotionData;
 use numpy::PyArray1;
@@ -24,11 +25,33 @@ use crate::convert::{
 };
 use crate::model::PyModel;
 
+/// Which rows validated a fit (and so which rows trained it).
+#[derive(Clone, Copy)]
+enum Holdout {
+    /// The last fraction of the rows (compatibility).
+    Fraction(f64),
+    /// A separate validation set: every data row trained.
+    Separate,
+    /// Blocked cross-validation: every data row trained.
+    CrossValidation,
+}
+
+impl Holdout {
+    /// How a loaded network was validated: as its file records it, else by
+    /// cross-validation (the default of `train` and `admittance train`).
+    fn recorded(model: &BroadModel) -> Holdout {
+        match model.provenance().data.map(|d| d.validation) {
+            Some(ValidationSplit::TrailingFraction { fraction }) => Holdout::Fraction(fraction),
+            Some(ValidationSplit::SeparateData) => Holdout::Separate,
+            _ => Holdout::CrossValidation,
+        }
+    }
+}
+
 /// How a network was trained, so that `grow` can rebuild the same training rows.
 #[derive(Clone)]
 struct TrainOptions {
-    /// `None`: a separate validation set was given (every data row trained).
-    validation_fraction: Option<f64>,
+    holdout: Holdout,
     input_filter_hz: f64,
     nominal: Option<Arc<Identification>>,
     joints: Vec<String>,
@@ -216,25 +239,33 @@ fn check_fraction(f: f64) -> PyResult<f64> {
     }
 }
 
-/// Training and validation rows: a split of `data` at `1 - fraction`, or all of `data` and
-/// the separate `validation` set.
+/// Training and validation rows: a split of `data` at `1 - fraction`, all of `data` and
+/// the separate `validation` set, or all of `data` alone (cross-validation).
 struct Split {
     x: Vec<f64>,
     y: Vec<f64>,
-    xv: Vec<f64>,
-    yv: Vec<f64>,
+    validation: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Split {
     fn new(
         (x, y, rows_n): (Vec<f64>, Vec<f64>, usize),
         validation: Option<(Vec<f64>, Vec<f64>, usize)>,
-        fraction: Option<f64>,
+        holdout: Holdout,
         n: usize,
     ) -> PyResult<Self> {
-        match (validation, fraction) {
-            (Some((xv, yv, _)), _) => Ok(Split { x, y, xv, yv }),
-            (None, Some(f)) => {
+        match (validation, holdout) {
+            (Some((xv, yv, _)), _) => Ok(Split {
+                x,
+                y,
+                validation: Some((xv, yv)),
+            }),
+            (None, Holdout::CrossValidation) => Ok(Split {
+                x,
+                y,
+                validation: None,
+            }),
+            (None, Holdout::Fraction(f)) => {
                 let train_rows = ((rows_n as f64) * (1.0 - f)).floor() as usize;
                 if train_rows < 2 || train_rows >= rows_n {
                     return Err(value_error(format!(
@@ -243,17 +274,24 @@ impl Split {
                 }
                 let (x, xv) = (x[..train_rows * 3 * n].to_vec(), x[train_rows * 3 * n..].to_vec());
                 let (y, yv) = (y[..train_rows * n].to_vec(), y[train_rows * n..].to_vec());
-                Ok(Split { x, y, xv, yv })
+                Ok(Split {
+                    x,
+                    y,
+                    validation: Some((xv, yv)),
+                })
             }
-            (None, None) => Err(value_error(
+            (None, Holdout::Separate) => Err(value_error(
                 "this network was trained with a separate validation set: pass `validation=` (the same data) to grow it",
             )),
         }
     }
 
-    fn sets(&self, n: usize) -> PyResult<(Dataset<'_>, Dataset<'_>)> {
+    fn sets(&self, n: usize) -> PyResult<(Dataset<'_>, Option<Dataset<'_>>)> {
         let train = Dataset::new(&self.x, &self.y, 3 * n, n).map_err(broad_error)?;
-        let val = Dataset::new(&self.xv, &self.yv, 3 * n, n).map_err(broad_error)?;
+        let val = match &self.validation {
+            Some((xv, yv)) => Some(Dataset::new(xv, yv, 3 * n, n).map_err(broad_error)?),
+            None => None,
+        };
         Ok((train, val))
     }
 }
@@ -302,16 +340,18 @@ impl PyNetwork {
 /// `tanh(qdot / v)` inputs (`friction_scales` v, default 0.01, 0.05, 0.2 rad/s).
 /// `input_filter_hz`: the observers' second input filter (0: the columns as recorded; the
 /// observer must then be fed through `InputConditioner` with the same cut-off).
-/// `validation_fraction` (default 0.2): the last rows held out to choose the ridge
-/// parameter and measure the validation NRMSE; or `validation`: a separate data set (a
-/// different excitation) for that, every row of `data` then trains. `nominal`: train the
+/// The ridge parameter is chosen, and the validation NRMSE measured, on `validation`, a
+/// separate data set (a different excitation), when given; else by blocked
+/// cross-validation over `folds` contiguous stretches of `data` (each scored by a fit on
+/// the others). Either way every row of `data` trains. `validation_fraction`: hold out
+/// the last rows instead (the tail of the same motion; kept for compatibility). `nominal`: train the
 /// hybrid observer's residual `tau - RNEA_nominal(q, qdot, qddot)` instead of `tau`.
 /// `seed`, `width_scale`, `width_neighbours`: centre placement and widths (the scenario
 /// files' `[observer.training]` keys). The GIL is released while it reads and fits.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 #[pyo3(signature = (data, m, nodes=1000, *, friction_features=false, friction_scales=None,
-    input_filter_hz=0.0, validation_fraction=None, validation=None, seed=None,
+    input_filter_hz=0.0, validation_fraction=None, validation=None, folds=5, seed=None,
     width_scale=2.0, width_neighbours=8, nominal=None))]
 pub fn train(
     py: Python<'_>,
@@ -323,6 +363,7 @@ pub fn train(
     input_filter_hz: f64,
     validation_fraction: Option<f64>,
     validation: Option<&Bound<'_, PyAny>>,
+    folds: usize,
     seed: Option<u64>,
     width_scale: f64,
     width_neighbours: usize,
@@ -332,15 +373,21 @@ pub fn train(
     let n = model.nq();
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
     let validation = validation.filter(|v| !v.is_none());
-    let fraction = match (validation, validation_fraction) {
+    let holdout = match (validation, validation_fraction) {
         (Some(_), Some(_)) => {
             return Err(value_error(
                 "give `validation` or `validation_fraction`, not both",
             ))
         }
-        (Some(_), None) => None,
-        (None, f) => Some(check_fraction(f.unwrap_or(0.2))?),
+        (Some(_), None) => Holdout::Separate,
+        (None, Some(f)) => Holdout::Fraction(check_fraction(f)?),
+        (None, None) => Holdout::CrossValidation,
     };
+    if folds < 2 {
+        return Err(value_error(format!(
+            "`folds` is {folds}, must be >= 2 (contiguous stretches of the rows)"
+        )));
+    }
     if friction_scales.is_some() && !friction_features {
         return Err(value_error(
             "`friction_scales` needs `friction_features=True`",
@@ -375,6 +422,7 @@ pub fn train(
             FrictionFeatures::none()
         },
         seed: seed.unwrap_or(defaults.seed),
+        cv_folds: folds,
         widths: WidthRule::Knn {
             k: width_neighbours,
             scale: width_scale,
@@ -382,7 +430,7 @@ pub fn train(
         ..defaults
     };
     let options = TrainOptions {
-        validation_fraction: fraction,
+        holdout,
         input_filter_hz,
         nominal: nominal.clone(),
         joints: joints.clone(),
@@ -400,9 +448,9 @@ pub fn train(
         let val_rows = val_arg
             .map(|v| training_arrays(v, "validation", n, Some(&joints), input_filter_hz, nominal))
             .transpose()?;
-        let split = Split::new(train_rows, val_rows, fraction, n)?;
+        let split = Split::new(train_rows, val_rows, holdout, n)?;
         let (train_set, val_set) = split.sets(n)?;
-        let (net, report) = fit(&train_set, Some(&val_set), &config).map_err(broad_error)?;
+        let (net, report) = fit(&train_set, val_set.as_ref(), &config).map_err(broad_error)?;
         require_finite_metrics(&report.validation_nrmse, "training")?;
         Ok(PyNetwork {
             model: net,
@@ -436,9 +484,11 @@ impl PyNetwork {
     /// Adds `nodes` Gaussian nodes without retraining (what `admittance grow` does; equal to
     /// a retrain on the grown node set): `data` must be the data the network was trained
     /// on, formed the same way. The options default to how this network was trained
-    /// (`validation_fraction`, `input_filter_hz`, `nominal`; for a loaded network the CLI's
-    /// defaults 0.2, 0 and none); a network trained with a separate `validation` set needs
-    /// it again. Updates `nodes` and `validation_nrmse`. The GIL is released meanwhile.
+    /// (`validation_fraction`, `input_filter_hz`, `nominal`; for a loaded network the
+    /// validation its file records, else cross-validation, no filter and no nominal
+    /// model); a network trained with a separate `validation` set needs it again. Updates
+    /// `nodes` and `validation_nrmse` (`None` after a growth under cross-validation: no
+    /// rows are held out and lambda is kept). The GIL is released meanwhile.
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (nodes, data, *, validation=None, validation_fraction=None,
         input_filter_hz=None, nominal=None, seed=1))]
@@ -457,17 +507,17 @@ impl PyNetwork {
         let trained = self.options.clone();
         let joints = trained.as_ref().map(|o| o.joints.clone());
         let validation = validation.filter(|v| !v.is_none());
-        let fraction = match (validation, validation_fraction) {
+        let holdout = match (validation, validation_fraction) {
             (Some(_), Some(_)) => {
                 return Err(value_error(
                     "give `validation` or `validation_fraction`, not both",
                 ))
             }
-            (Some(_), None) => None,
-            (None, Some(f)) => Some(check_fraction(f)?),
+            (Some(_), None) => Holdout::Separate,
+            (None, Some(f)) => Holdout::Fraction(check_fraction(f)?),
             (None, None) => match &trained {
-                Some(o) => o.validation_fraction,
-                None => Some(0.2),
+                Some(o) => o.holdout,
+                None => Holdout::recorded(&self.model),
             },
         };
         let filter = input_filter_hz.unwrap_or(trained.as_ref().map_or(0.0, |o| o.input_filter_hz));
@@ -484,13 +534,13 @@ impl PyNetwork {
             ..BroadConfig::default()
         };
         let net = &mut self.model;
-        let (nrmse, seconds) = py.detach(|| -> PyResult<(Vec<f64>, f64)> {
+        let (nrmse, seconds) = py.detach(|| -> PyResult<(Option<Vec<f64>>, f64)> {
             let nominal = nominal.as_deref();
             let rows_t = training_arrays(train_arg, "data", n, joints.as_deref(), filter, nominal)?;
             let rows_v = val_arg
                 .map(|v| training_arrays(v, "validation", n, joints.as_deref(), filter, nominal))
                 .transpose()?;
-            let split = Split::new(rows_t, rows_v, fraction, n)?;
+            let split = Split::new(rows_t, rows_v, holdout, n)?;
             let (train_set, val_set) = split.sets(n)?;
             let report = net
                 .grow(
@@ -499,11 +549,17 @@ impl PyNetwork {
                     &config,
                 )
                 .map_err(broad_error)?;
-            let nrmse = net.evaluate(&val_set, 0).map_err(broad_error)?;
-            require_finite_metrics(&nrmse, "growth")?;
+            let nrmse = match &val_set {
+                Some(v) => {
+                    let e = net.evaluate(v, 0).map_err(broad_error)?;
+                    require_finite_metrics(&e, "growth")?;
+                    Some(e)
+                }
+                None => None,
+            };
             Ok((nrmse, report.total_s))
         })?;
-        self.validation_nrmse = Some(nrmse);
+        self.validation_nrmse = nrmse;
         self.seconds = Some(seconds);
         Ok(())
     }
@@ -606,7 +662,8 @@ impl PyNetwork {
         self.samples
     }
 
-    /// Validation rows (`None` for a loaded network).
+    /// Validation rows (`None` for a loaded network; 0 under cross-validation, where
+    /// every row is scored by a fit on the others).
     #[getter]
     fn validation_samples(&self) -> Option<usize> {
         self.validation_samples

@@ -19,15 +19,21 @@ def inputs(data, rows=slice(0, 200)):
 
 def test_train_reports_and_predicts(baxter, motion, network):
     assert network.nodes == 80 and network.n_inputs == 21 and network.n_outputs == 7
-    assert network.samples == 6400 and network.validation_samples == 1600  # the last 20 % held out
+    # Blocked cross-validation: every row trains, every row is scored by a fit on the others.
+    assert network.samples == 8000 and network.validation_samples == 0
     assert network.can_grow and not network.friction_features and network.ridge_lambda > 0
     assert network.seconds > 0
     nrmse = network.validation_nrmse
     assert nrmse.shape == (7,) and np.all(nrmse < 0.5), nrmse
-    # The reported NRMSE is that of its predictions on the held-out rows.
+    # With `validation_fraction` the reported NRMSE is that of its predictions on the
+    # held-out rows.
+    tail = adm.train(motion, baxter, 80, validation_fraction=0.2)
+    assert tail.samples == 6400 and tail.validation_samples == 1600
     held = slice(6400, 8000)
-    err = network.predict(*inputs(motion, held)) - motion["tau"][held]
-    np.testing.assert_allclose(np.sqrt(np.mean(err**2, axis=0)) / np.std(motion["tau"][held], axis=0), nrmse, rtol=1e-9)
+    err = tail.predict(*inputs(motion, held)) - motion["tau"][held]
+    np.testing.assert_allclose(
+        np.sqrt(np.mean(err**2, axis=0)) / np.std(motion["tau"][held], axis=0), tail.validation_nrmse, rtol=1e-9
+    )
     # One sample at a time equals the batch; out= is written.
     batch = network.predict(*inputs(motion))
     assert batch.shape == (200, 7)
@@ -76,11 +82,15 @@ def test_csv_column_dict_and_cli_give_the_same_network(baxter, motion, tmp_path,
 
 
 def test_grow_save_and_load(baxter, motion, tmp_path):
-    net = adm.train(motion, baxter, 50)
+    net = adm.train(motion, baxter, 50, validation_fraction=0.2)
     before = net.validation_nrmse.copy()
     net.grow(30, motion)
     assert net.nodes == 80
     assert np.all(np.isfinite(net.validation_nrmse)) and not np.array_equal(net.validation_nrmse, before)
+    # Under cross-validation (the default) a growth holds no rows out.
+    cv = adm.train(motion, baxter, 50)
+    cv.grow(10, motion)
+    assert cv.nodes == 60 and cv.validation_nrmse is None
     path = tmp_path / "net.broad"
     net.save(path)
     loaded = adm.load_network(str(path))
@@ -88,8 +98,8 @@ def test_grow_save_and_load(baxter, motion, tmp_path):
     np.testing.assert_array_equal(loaded.predict(*x), net.predict(*x))
     assert loaded.validation_nrmse is None and loaded.seconds is None and loaded.can_grow
     assert loaded.samples == 6400
-    # A loaded network grows with the CLI's defaults (the last 20 % held out).
-    loaded.grow(10, motion)
+    # A loaded network grows with the default (cross-validation: every row) unless told.
+    loaded.grow(10, motion, validation_fraction=0.2)
     assert loaded.nodes == 90 and loaded.validation_nrmse.shape == (7,)
     # Growth needs the training data: other data is refused.
     other = free_motion(baxter, 40.0, rate=200.0, seed=5)

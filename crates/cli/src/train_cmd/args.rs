@@ -26,6 +26,14 @@ fn finite(text: &str) -> Result<f64, String> {
     }
 }
 
+/// `--folds`: an integer >= 2.
+pub fn fold_count(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(v) if v >= 2 => Ok(v),
+        _ => Err("the value must be an integer >= 2 (contiguous stretches of the rows)".into()),
+    }
+}
+
 /// A cut-off in Hz: finite and >= 0 (0: no filter).
 pub fn non_negative_hz(text: &str) -> Result<f64, String> {
     match finite(text)? {
@@ -118,7 +126,7 @@ pub fn learn_error(e: BroadError) -> CliError {
     let message = e.to_string();
     match e {
         BroadError::TooManyNodes { .. } => CliError::usage(format!(
-            "--nodes: {message} (after the held-out rows); use fewer nodes"
+            "--nodes: {message} (rows held out by --validation-fraction not counted); use fewer nodes"
         )),
         BroadError::MemoryBudget { .. } => CliError::usage(format!(
             "{message}: use fewer --nodes, or raise the limit with --max-memory-gb if the machine has the memory"

@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use admittance_dynamics::{rnea, Data, Model};
-use admittance_learning::broad::{BroadError, Dataset};
+use admittance_dynamics::{rnea, Data, Identification, Model};
+use admittance_learning::broad::{fnv1a64, BroadError, Dataset};
 use admittance_scenario::{FreeMotionData, FreeMotionError};
 
 use super::args::learn_error;
@@ -100,6 +100,27 @@ pub fn arrays(
         }
     }
     Ok((x, y))
+}
+
+/// An identification file (`admittance identify`) of `arm` and the FNV-1a 64 checksum
+/// of its bytes (recorded in the model file as the target's identity).
+pub fn identification(path: &Path, arm: &Model) -> Result<(Identification, u64), CliError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))?;
+    let ident = Identification::load(path, arm).map_err(|e| CliError::input(e.to_string()))?;
+    Ok((ident, fnv1a64(&bytes)))
+}
+
+/// Replaces the targets `y` by what the identified model does not explain,
+/// `tau - ident.predict(q, qdot, qddot)`.
+pub fn subtract_identified(
+    ident: &Identification,
+    x: &[f64],
+    y: &mut [f64],
+) -> Result<(), CliError> {
+    ident
+        .subtract_from(x, y)
+        .map_err(|e| CliError::input(format!("--nominal: {e}")))
 }
 
 /// The training and held-out data sets of rows `..train_rows` and `train_rows..`

@@ -81,6 +81,9 @@ pub struct FitSize {
     pub centre_subsample: usize,
     /// Candidate ridge parameters G.
     pub lambdas: usize,
+    /// Stretches K of the blocked cross-validation (0 without: a validation set or a
+    /// single lambda); K Gram matrices are held and K factorisations made per candidate.
+    pub folds: usize,
     /// Worker threads T.
     pub threads: usize,
 }
@@ -105,6 +108,11 @@ impl FitSize {
             added: 0,
             centre_subsample: config.centre_subsample,
             lambdas: config.lambda_grid.len(),
+            folds: if validation_rows == 0 && config.lambda_grid.len() > 1 {
+                config.cv_folds
+            } else {
+                0
+            },
             threads: config.thread_count(),
         }
     }
@@ -128,6 +136,7 @@ impl FitSize {
             added,
             centre_subsample: config.centre_subsample,
             lambdas: 1,
+            folds: 0,
             threads: config.thread_count(),
         }
     }
@@ -180,7 +189,11 @@ fn memory_values(s: &FitSize, p: u64) -> Option<u64> {
     let data = rows.checked_mul(u(s.inputs).checked_add(u(s.targets))?)?;
     let per_thread = u(s.threads.max(1)).checked_mul(q2)?;
     let summed = q2.checked_add(p2)?;
-    let held = if s.added > 0 { 4 } else { 3u64 }.checked_mul(p2)?;
+    // Held P x P matrices: Gram, factor and solve copies; the stretches' Grams and the
+    // Gram without one stretch under cross-validation.
+    let held = if s.added > 0 { 4 } else { 3u64 }
+        .checked_add(u(s.folds).checked_add(u(s.folds.min(1)))?)?
+        .checked_mul(p2)?;
     let gram_phase = per_thread.max(summed).max(held);
     let m = u(s.centre_subsample.min(s.rows));
     let centres = m
@@ -202,7 +215,8 @@ fn work_flop(s: &FitSize, p: f64) -> f64 {
     if s.added == 0 {
         let centres = 3.0 * l * m * d + 3.0 * l * l * d;
         let gram = n * (l * feature + q * q);
-        let solve = (f(s.lambdas) + 1.0) * p * p * p / 3.0;
+        let solves = f(s.lambdas) * f(s.folds.max(1)) + 1.0;
+        let solve = solves * p * p * p / 3.0;
         let validation = v * p * (feature + 2.0 * f(s.lambdas) * o);
         centres + gram + solve + validation
     } else {

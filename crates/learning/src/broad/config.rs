@@ -124,6 +124,11 @@ pub struct BroadConfig {
     /// (N training rows), i.e. the fit minimises `(1/N)||A W - Y||^2 + lambda_rel ||W'||^2`
     /// where W' is W without the bias row. Several values need a validation set.
     pub lambda_grid: Vec<f64>,
+    /// Contiguous stretches K of the blocked cross-validation that chooses lambda when no
+    /// validation set is given (default 5; see `cv.rs`); 0: no cross-validation, a grid
+    /// of several values then needs a validation set.
+    #[serde(default = "default_cv_folds")]
+    pub cv_folds: usize,
     /// Rows per block when accumulating the Gram matrix (never the whole N x P pattern);
     /// capped at 256 on the packed AVX2 path, where larger blocks would leave the cache.
     pub block_rows: usize,
@@ -147,12 +152,17 @@ impl Default for BroadConfig {
             seed: 0x5eed_b7ad,
             widths: WidthRule::Knn { k: 8, scale: 2.0 },
             lambda_grid: vec![1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2],
+            cv_folds: default_cv_folds(),
             block_rows: 2048,
             threads: 0,
             gram_strategy: GramStrategy::PerThread,
             budget: Budget::default(),
         }
     }
+}
+
+fn default_cv_folds() -> usize {
+    5
 }
 
 impl BroadConfig {
@@ -169,6 +179,11 @@ impl BroadConfig {
         self.friction.validate(d_in)?;
         if self.block_rows == 0 {
             return Err(BroadError::Config("block_rows must be > 0".into()));
+        }
+        if self.cv_folds == 1 {
+            return Err(BroadError::Config(
+                "cv_folds must be 0 (none) or at least 2".into(),
+            ));
         }
         if self.lambda_grid.is_empty() {
             return Err(BroadError::Config("lambda_grid is empty".into()));

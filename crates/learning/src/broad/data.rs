@@ -114,6 +114,15 @@ impl<'a> Dataset<'a> {
     pub(crate) fn target_rows(&self, start: usize, len: usize) -> &'a [f64] {
         &self.targets[start * self.d_out..(start + len) * self.d_out]
     }
+    /// The rows `start..end` as a data set (already checked: no new checks).
+    pub(crate) fn slice(&self, start: usize, end: usize) -> Dataset<'a> {
+        Dataset {
+            inputs: self.input_rows(start, end - start),
+            targets: self.target_rows(start, end - start),
+            n_samples: end - start,
+            ..*self
+        }
+    }
 }
 
 /// Largest magnitude a data value may have: 10^12. No joint angle, velocity, acceleration

@@ -108,8 +108,9 @@ pub enum BroadError {
         /// The absolute lambdas that were tried.
         tried: Vec<f64>,
     },
-    /// `fit` needs a validation set to choose between several lambdas.
-    #[error("a lambda grid of {0} values needs a validation set to choose from")]
+    /// `fit` needs a validation set (or cross-validation folds) to choose between several
+    /// lambdas.
+    #[error("a lambda grid of {0} values needs a validation set or cross-validation folds to choose from")]
     NeedValidation(usize),
     /// The model holds no growth state (it was stripped, or loaded from a file saved
     /// without it), so nodes cannot be added incrementally.

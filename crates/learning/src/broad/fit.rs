@@ -5,10 +5,12 @@
 use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
 use super::config::BroadConfig;
+use super::coverage::coverage_threshold;
+use super::cv::{acc_std, accumulate_folds, check_folds, cross_validate};
 use super::data::{Dataset, Standardiser};
 use super::error::BroadError;
 use super::features::{FeatureMap, NodeSet};
-use super::gram::{accumulate_gram, prediction_sse};
+use super::gram::{accumulate_gram, prediction_sse, GramAcc};
 use super::model::{
     check_finite_result, nrmse, par_for, target_std, train_nrmse, BroadModel, GrowthState,
 };
@@ -55,6 +57,10 @@ pub struct LambdaScore {
 pub struct FitReport {
     /// Training rows N.
     pub samples: usize,
+    /// Stretches of the blocked cross-validation that chose lambda (0: none, a
+    /// validation set or a single lambda).
+    #[serde(default)]
+    pub cv_folds: usize,
     /// Validation rows (0 without validation set).
     pub validation_samples: usize,
     /// Enhancement nodes L.
@@ -68,12 +74,35 @@ pub struct FitReport {
     /// All candidates.
     pub lambda_scan: Vec<LambdaScore>,
     /// Per-output validation NRMSE at the chosen lambda (RMSE / std of the validation
-    /// target; RMSE itself where that std is 0). Empty without validation set.
+    /// target; RMSE itself where that std is 0). With cross-validation, the pooled error
+    /// of every stretch predicted by the fit on the others, over the std of all training
+    /// targets. Empty with a single lambda and no validation set.
     pub validation_nrmse: Vec<f64>,
+    /// Per-output validation RMSE at the chosen lambda, in the targets' unit (N m for
+    /// torques): the expected error on motion the fit did not see. Empty when
+    /// `validation_nrmse` is.
+    #[serde(default)]
+    pub validation_rmse: Vec<f64>,
     /// Per-output training NRMSE at the chosen lambda (from the Gram terms).
     pub train_nrmse: Vec<f64>,
     /// Time per phase.
     pub times: PhaseTimes,
+}
+
+/// A grid of several lambdas needs a validation set or cross-validation folds (enough
+/// rows for them).
+fn check_choice(
+    train: &Dataset<'_>,
+    validation: Option<&Dataset<'_>>,
+    config: &BroadConfig,
+) -> Result<(), BroadError> {
+    if validation.is_some() || config.lambda_grid.len() == 1 {
+        return Ok(());
+    }
+    if config.cv_folds == 0 {
+        return Err(BroadError::NeedValidation(config.lambda_grid.len()));
+    }
+    check_folds(train.n_samples(), config.cv_folds)
 }
 
 fn check_same_widths(train: &Dataset<'_>, other: &Dataset<'_>) -> Result<(), BroadError> {
@@ -113,9 +142,7 @@ pub fn fit(
     if let Some(v) = validation {
         check_same_widths(train, v)?;
     }
-    if validation.is_none() && config.lambda_grid.len() > 1 {
-        return Err(BroadError::NeedValidation(config.lambda_grid.len()));
-    }
+    check_choice(train, validation, config)?;
     let size = FitSize::fit(
         train.n_samples(),
         validation.map_or(0, |v| v.n_samples()),
@@ -181,9 +208,7 @@ pub fn fit_with_nodes(
     if let Some(v) = validation {
         check_same_widths(train, v)?;
     }
-    if validation.is_none() && config.lambda_grid.len() > 1 {
-        return Err(BroadError::NeedValidation(config.lambda_grid.len()));
-    }
+    check_choice(train, validation, config)?;
     let mut size = FitSize::fit(
         train.n_samples(),
         validation.map_or(0, |v| v.n_samples()),
@@ -214,6 +239,25 @@ pub fn fit_with_nodes(
     })
 }
 
+/// The chosen candidate: its index in the grid, its weights on all training rows and
+/// its validation NRMSE.
+struct Choice {
+    c: usize,
+    w: Mat<f64>,
+    validation_nrmse: Vec<f64>,
+    validation_rmse: Vec<f64>,
+}
+
+/// RMSE from NRMSE and the targets' std (`nrmse` is the RMSE itself where the std is 0).
+fn to_rmse(nrmse: &[f64], std: &[f64]) -> Vec<f64> {
+    nrmse
+        .iter()
+        .zip(std)
+        .map(|(&e, &sd)| if sd > 0.0 { e * sd } else { e })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
 fn fit_inner(
     train: &Dataset<'_>,
     validation: Option<&Dataset<'_>>,
@@ -230,73 +274,35 @@ fn fit_inner(
     let d_out = train.d_out();
     let n = train.n_samples();
     let bias = fm.bias_index();
-
-    let t = Instant::now();
-    let acc = accumulate_gram(&fm, train, config.block_rows, threads, config.gram_strategy);
-    times.gram_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let mut scan = Vec::with_capacity(config.lambda_grid.len());
-    let mut solutions: Vec<(usize, Mat<f64>)> = Vec::new();
-    for (c, &rel) in config.lambda_grid.iter().enumerate() {
-        let lambda = rel * n as f64;
-        let ok = match factor(acc.g.as_ref(), lambda, bias, par) {
-            Some(l) => {
-                solutions.push((c, solve(l.as_ref(), acc.aty.as_ref(), par)));
-                true
-            }
-            None => false,
-        };
-        scan.push(LambdaScore {
+    let cv_folds = if validation.is_none() && config.lambda_grid.len() > 1 {
+        config.cv_folds
+    } else {
+        0
+    };
+    let mut scan: Vec<LambdaScore> = config
+        .lambda_grid
+        .iter()
+        .map(|&rel| LambdaScore {
             lambda_rel: rel,
-            lambda,
-            factorised: ok,
+            lambda: rel * n as f64,
+            factorised: false,
             validation_nrmse: Vec::new(),
             mean_nrmse: None,
-        });
-    }
-    if solutions.is_empty() {
-        return Err(BroadError::NotPositiveDefinite {
-            tried: scan.iter().map(|s| s.lambda).collect(),
-        });
-    }
-    times.solve_s = t.elapsed().as_secs_f64();
+        })
+        .collect();
+    let (acc, choice) = if cv_folds > 0 {
+        choose_by_cv(&fm, train, config, cv_folds, &mut scan, times)?
+    } else {
+        choose_on_holdout(&fm, train, validation, config, &mut scan, times)?
+    };
 
     let t = Instant::now();
-    let mut chosen = 0usize; // index into `solutions`
-    let mut validation_nrmse = Vec::new();
-    if let Some(val) = validation {
-        let mut w_all = Mat::<f64>::zeros(p, solutions.len() * d_out);
-        for (i, (_, w)) in solutions.iter().enumerate() {
-            w_all.as_mut().subcols_mut(i * d_out, d_out).copy_from(w);
-        }
-        let sse = prediction_sse(
-            &fm,
-            val,
-            w_all.as_ref(),
-            config.block_rows,
-            threads,
-            config.gram_strategy,
-        );
-        let std = target_std(val);
-        let mut best = f64::INFINITY;
-        for (i, (c, _)) in solutions.iter().enumerate() {
-            let e = nrmse(&sse[i * d_out..(i + 1) * d_out], val.n_samples(), &std);
-            let mean = e.iter().sum::<f64>() / d_out as f64;
-            if mean < best {
-                best = mean;
-                chosen = i;
-            }
-            scan[*c].validation_nrmse = e;
-            scan[*c].mean_nrmse = Some(mean);
-        }
-        validation_nrmse = scan[solutions[chosen].0].validation_nrmse.clone();
-    }
-    times.validation_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let (c, w) = solutions.swap_remove(chosen);
-    drop(solutions);
+    let Choice {
+        c,
+        w,
+        validation_nrmse,
+        validation_rmse,
+    } = choice;
     let lambda = scan[c].lambda;
     let chol = factor(acc.g.as_ref(), lambda, bias, par).ok_or_else(|| {
         BroadError::NotPositiveDefinite {
@@ -322,6 +328,7 @@ fn fit_inner(
         training_rows: n,
         validation_rows: validation.map_or(0, |v| v.n_samples()),
     };
+    let coverage_threshold = coverage_threshold(&fm, train, threads);
     let mut model = BroadModel {
         fm,
         d_out,
@@ -330,6 +337,7 @@ fn fit_inner(
         w: Vec::new(),
         wt: Vec::new(),
         state: Some(state),
+        coverage_threshold,
         provenance: Provenance {
             fit: Some(fit_settings),
             ..Provenance::default()
@@ -338,6 +346,7 @@ fn fit_inner(
     model.set_weights(w.as_ref());
     let report = FitReport {
         samples: n,
+        cv_folds,
         validation_samples: validation.map(|v| v.n_samples()).unwrap_or(0),
         nodes: model.n_nodes(),
         pattern_width: p,
@@ -345,8 +354,157 @@ fn fit_inner(
         lambda_rel: scan[c].lambda_rel,
         lambda_scan: scan,
         validation_nrmse,
+        validation_rmse,
         train_nrmse: train_e,
         times: PhaseTimes::default(),
     };
     Ok((model, report))
+}
+
+/// Records the per-output NRMSE `e` of candidate `c` in the scan; true when its mean
+/// beats `best`.
+fn record(scan: &mut [LambdaScore], c: usize, e: Vec<f64>, best: &mut f64) -> bool {
+    let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+    scan[c].validation_nrmse = e;
+    scan[c].mean_nrmse = Some(mean);
+    let better = mean < *best;
+    if better {
+        *best = mean;
+    }
+    better
+}
+
+/// One Gram pass, a solve per candidate, the choice on the validation set (one pass
+/// predicting with every candidate), or the single candidate without one.
+fn choose_on_holdout(
+    fm: &FeatureMap,
+    train: &Dataset<'_>,
+    validation: Option<&Dataset<'_>>,
+    config: &BroadConfig,
+    scan: &mut [LambdaScore],
+    times: &mut PhaseTimes,
+) -> Result<(GramAcc, Choice), BroadError> {
+    let threads = config.thread_count();
+    let par = par_for(threads);
+    let (p, d_out) = (fm.width(), train.d_out());
+    let t = Instant::now();
+    let acc = accumulate_gram(fm, train, config.block_rows, threads, config.gram_strategy);
+    times.gram_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut solutions: Vec<(usize, Mat<f64>)> = Vec::new();
+    for (c, score) in scan.iter_mut().enumerate() {
+        if let Some(l) = factor(acc.g.as_ref(), score.lambda, fm.bias_index(), par) {
+            solutions.push((c, solve(l.as_ref(), acc.aty.as_ref(), par)));
+            score.factorised = true;
+        }
+    }
+    if solutions.is_empty() {
+        return Err(BroadError::NotPositiveDefinite {
+            tried: scan.iter().map(|s| s.lambda).collect(),
+        });
+    }
+    times.solve_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut chosen = 0usize; // index into `solutions`
+    let mut std = Vec::new();
+    if let Some(val) = validation {
+        let mut w_all = Mat::<f64>::zeros(p, solutions.len() * d_out);
+        for (i, (_, w)) in solutions.iter().enumerate() {
+            w_all.as_mut().subcols_mut(i * d_out, d_out).copy_from(w);
+        }
+        let sse = prediction_sse(
+            fm,
+            val,
+            w_all.as_ref(),
+            config.block_rows,
+            threads,
+            config.gram_strategy,
+        );
+        std = target_std(val);
+        let mut best = f64::INFINITY;
+        for (i, (c, _)) in solutions.iter().enumerate() {
+            let e = nrmse(&sse[i * d_out..(i + 1) * d_out], val.n_samples(), &std);
+            if record(scan, *c, e, &mut best) {
+                chosen = i;
+            }
+        }
+    }
+    times.validation_s = t.elapsed().as_secs_f64();
+    let (c, w) = solutions.swap_remove(chosen);
+    let validation_nrmse = scan[c].validation_nrmse.clone();
+    Ok((
+        acc,
+        Choice {
+            c,
+            w,
+            validation_rmse: to_rmse(&validation_nrmse, &std),
+            validation_nrmse,
+        },
+    ))
+}
+
+/// Blocked cross-validation (`cv.rs`): per-stretch Gram passes, every candidate scored
+/// on every stretch by the fit on the others, then one solve on all rows at the best.
+fn choose_by_cv(
+    fm: &FeatureMap,
+    train: &Dataset<'_>,
+    config: &BroadConfig,
+    folds: usize,
+    scan: &mut [LambdaScore],
+    times: &mut PhaseTimes,
+) -> Result<(GramAcc, Choice), BroadError> {
+    let threads = config.thread_count();
+    let par = par_for(threads);
+    let t = Instant::now();
+    let fg = accumulate_folds(
+        fm,
+        train,
+        folds,
+        config.block_rows,
+        threads,
+        config.gram_strategy,
+    );
+    times.gram_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let scores = cross_validate(&fg, &config.lambda_grid, fm.bias_index(), par);
+    let mut best = f64::INFINITY;
+    let mut chosen = None;
+    for (c, score) in scores.into_iter().enumerate() {
+        let Some(e) = score else { continue };
+        scan[c].factorised = true;
+        if record(scan, c, e, &mut best) || chosen.is_none() {
+            chosen = Some(c);
+        }
+    }
+    times.validation_s = t.elapsed().as_secs_f64();
+    let Some(c) = chosen else {
+        return Err(BroadError::NotPositiveDefinite {
+            tried: scan.iter().map(|s| s.lambda).collect(),
+        });
+    };
+
+    let t = Instant::now();
+    let acc = fg.total;
+    let lambda = scan[c].lambda;
+    let l = factor(acc.g.as_ref(), lambda, fm.bias_index(), par).ok_or_else(|| {
+        BroadError::NotPositiveDefinite {
+            tried: vec![lambda],
+        }
+    })?;
+    let w = solve(l.as_ref(), acc.aty.as_ref(), par);
+    times.solve_s = t.elapsed().as_secs_f64();
+    let validation_nrmse = scan[c].validation_nrmse.clone();
+    let std = acc_std(&acc, train.n_samples());
+    Ok((
+        acc,
+        Choice {
+            c,
+            w,
+            validation_rmse: to_rmse(&validation_nrmse, &std),
+            validation_nrmse,
+        },
+    ))
 }

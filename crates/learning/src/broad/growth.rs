@@ -4,6 +4,7 @@
 use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
 use super::config::BroadConfig;
+use super::coverage::coverage_threshold;
 use super::data::{Dataset, Standardiser};
 use super::error::BroadError;
 use super::features::{FeatureMap, NodeSet};
@@ -178,6 +179,9 @@ impl BroadModel {
             },
         });
         self.fm = fm;
+        if self.coverage_threshold.is_some() {
+            self.coverage_threshold = coverage_threshold(&self.fm, train, config.thread_count());
+        }
         self.state = Some(new_state);
         self.set_weights(w.as_ref());
         Ok(GrowthReport {

@@ -13,6 +13,7 @@
 //!                {"input_filter_hz", "validation", "target"}), "fit" (null or {"nodes",
 //!                "centres", "lambda_grid", "training_rows", "validation_rows"}),
 //!                "growth": [{"nodes_added", "centres"}, ...],
+//!                "coverage_threshold" (absent or m_0 in (0, 1], coverage.rs),
 //!                "arrays": [{"name", "len"}, ...]}
 //! 16+H..end-8    payload: the f64 arrays named in "arrays", in that order
 //! end-8..end     u64: FNV-1a-64 of every byte before it
@@ -83,6 +84,9 @@ struct Header {
     fit: Option<FitSettings>,
     #[serde(default)]
     growth: Vec<GrowthRecord>,
+    /// Coverage threshold (`coverage.rs`); absent in older files (no coverage).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    coverage_threshold: Option<f64>,
     arrays: Vec<ArrayInfo>,
 }
 
@@ -358,6 +362,7 @@ impl BroadModel {
             data: prov.data,
             fit: prov.fit.clone(),
             growth: prov.growth.clone(),
+            coverage_threshold: self.coverage_threshold,
             arrays: arrays
                 .iter()
                 .map(|(name, v)| ArrayInfo {
@@ -448,6 +453,11 @@ fn assemble(header: &Header, arrays: Vec<Vec<f64>>, p: usize) -> Result<BroadMod
     if !(lambda[0] > 0.0 && lambda[1] > 0.0) {
         return Err(format!("invalid lambda {lambda:?}"));
     }
+    if let Some(t) = header.coverage_threshold {
+        if !(t.is_finite() && t > 0.0 && t <= 1.0) {
+            return Err(format!("invalid coverage threshold {t}"));
+        }
+    }
     let fm = FeatureMap::new(Standardiser { mean, std }, friction, nodes);
     let mut model = BroadModel {
         fm,
@@ -457,6 +467,7 @@ fn assemble(header: &Header, arrays: Vec<Vec<f64>>, p: usize) -> Result<BroadMod
         w: Vec::new(),
         wt: Vec::new(),
         state: None,
+        coverage_threshold: header.coverage_threshold,
         provenance: Provenance::default(),
     };
     model.set_weights(faer::MatRef::from_row_major_slice(&w, p, n));

@@ -37,6 +37,11 @@ impl Workspace {
     pub fn new() -> Self {
         Self::default()
     }
+
+    /// The pattern row of the last prediction.
+    pub(crate) fn pattern(&self) -> &[f64] {
+        &self.pattern
+    }
 }
 
 /// A trained flat ("broad") RBF network, `f_hat(x) = W^T a(x)` with the pattern row
@@ -52,6 +57,8 @@ pub struct BroadModel {
     /// W^T, d_out x P, row-major (prediction layout).
     pub(crate) wt: Vec<f64>,
     pub(crate) state: Option<GrowthState>,
+    /// Coverage threshold `m_0` (`coverage.rs`); `None`: no coverage (older files).
+    pub(crate) coverage_threshold: Option<f64>,
     /// What the model knows about how it was made (`provenance.rs`).
     pub(crate) provenance: Provenance,
 }
@@ -218,7 +225,7 @@ impl BroadModel {
         }
     }
 
-    fn check_input(&self, x: &[f64]) -> Result<(), BroadError> {
+    pub(crate) fn check_input(&self, x: &[f64]) -> Result<(), BroadError> {
         if x.len() != self.d_in() {
             return Err(BroadError::Dimension {
                 what: "input vector",
@@ -251,6 +258,17 @@ impl BroadModel {
         Ok(())
     }
 
+    /// The pattern row of the checked input `x` in the workspace (grown once if it is
+    /// too small).
+    pub(crate) fn fill_pattern<'w>(&self, x: &[f64], ws: &'w mut Workspace) -> &'w [f64] {
+        let p = self.pattern_width();
+        if ws.pattern.len() != p {
+            ws.pattern.resize(p, 0.0);
+        }
+        self.fm.fill_row(x, &mut ws.pattern);
+        &ws.pattern
+    }
+
     /// `out = W^T a(x)`: the estimate `f_hat(q, q', q'')` of docs/method.md section 5 for one
     /// raw input row. Allocation-free when `ws` comes from [`workspace`](Self::workspace)
     /// (a workspace made before a [`grow`](Self::grow) is enlarged once).
@@ -269,10 +287,7 @@ impl BroadModel {
             });
         }
         let p = self.pattern_width();
-        if ws.pattern.len() != p {
-            ws.pattern.resize(p, 0.0);
-        }
-        self.fm.fill_row(x, &mut ws.pattern);
+        self.fill_pattern(x, ws);
         for (o, v) in out.iter_mut().enumerate() {
             *v = kernels::dot(&ws.pattern, &self.wt[o * p..(o + 1) * p]);
         }

@@ -62,6 +62,15 @@ pub enum TrainingTarget {
         /// Scale of the nominal model's masses and inertias.
         nominal_inertia_scale: f64,
     },
+    /// What an identified model misses, `tau - ident.predict(q, q', q'')` (the hybrid
+    /// observer on an identification file of `admittance identify`, `admittance train
+    /// --nominal`).
+    IdentifiedResidual {
+        /// FNV-1a 64 of the identification file's bytes (written as 16 hex digits): which
+        /// identification the residual belongs to.
+        #[serde(with = "hex_u64")]
+        checksum: u64,
+    },
 }
 
 impl std::fmt::Display for TrainingTarget {
@@ -73,6 +82,10 @@ impl std::fmt::Display for TrainingTarget {
             } => write!(
                 f,
                 "the residual of the nominal model (inertia scale {nominal_inertia_scale})"
+            ),
+            TrainingTarget::IdentifiedResidual { checksum } => write!(
+                f,
+                "the residual of the identified model (identification file checksum {checksum:016x})"
             ),
         }
     }
@@ -88,8 +101,15 @@ pub enum ValidationSplit {
         /// Fraction of the rows held out, in (0, 1).
         fraction: f64,
     },
-    /// A separate data set (a scenario's `[observer.training] validation`).
+    /// A separate data set (a scenario's `[observer.training] validation`, `admittance
+    /// train --validation`).
     SeparateData,
+    /// Blocked cross-validation over `folds` contiguous stretches of the training rows
+    /// (each scored by a fit on the others); the network was fitted on all of them.
+    BlockedCrossValidation {
+        /// Number of stretches K (>= 2).
+        folds: usize,
+    },
     /// No validation data (one ridge parameter given).
     NoValidation,
 }
@@ -101,6 +121,9 @@ impl std::fmt::Display for ValidationSplit {
                 write!(f, "the last {fraction} of the rows")
             }
             ValidationSplit::SeparateData => write!(f, "a separate data set"),
+            ValidationSplit::BlockedCrossValidation { folds } => {
+                write!(f, "blocked cross-validation over {folds} stretches")
+            }
             ValidationSplit::NoValidation => write!(f, "no validation data"),
         }
     }
@@ -134,6 +157,13 @@ impl DataSettings {
             if !(fraction > 0.0 && fraction < 1.0) {
                 return Err(BroadError::Config(format!(
                     "validation fraction {fraction} must be in (0, 1)"
+                )));
+            }
+        }
+        if let ValidationSplit::BlockedCrossValidation { folds } = self.validation {
+            if folds < 2 {
+                return Err(BroadError::Config(format!(
+                    "cross-validation folds {folds} must be >= 2"
                 )));
             }
         }
@@ -435,6 +465,34 @@ mod tests {
         }
         .validate()
         .is_err());
+    }
+
+    /// The new variants round-trip; files written before them still read.
+    #[test]
+    fn identified_residual_and_cross_validation_round_trip() {
+        let d = DataSettings {
+            input_filter_hz: 4.0,
+            validation: ValidationSplit::BlockedCrossValidation { folds: 5 },
+            target: TrainingTarget::IdentifiedResidual {
+                checksum: 0xfedc_ba98_7654_3210,
+            },
+        };
+        let text = serde_json::to_string(&d).unwrap();
+        assert!(
+            text.contains("\"kind\":\"blocked_cross_validation\",\"folds\":5"),
+            "{text}"
+        );
+        assert!(text.contains("\"checksum\":\"fedcba9876543210\""), "{text}");
+        assert_eq!(serde_json::from_str::<DataSettings>(&text).unwrap(), d);
+        let old = r#"{"input_filter_hz":0.0,"validation":{"kind":"trailing_fraction","fraction":0.2},"target":{"kind":"free_motion_torque"}}"#;
+        assert!(serde_json::from_str::<DataSettings>(old).is_ok());
+        assert!(DataSettings {
+            validation: ValidationSplit::BlockedCrossValidation { folds: 1 },
+            ..d
+        }
+        .validate()
+        .is_err());
+        assert!(d.target.to_string().contains("fedcba9876543210"));
     }
 
     #[test]

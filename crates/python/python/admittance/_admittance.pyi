@@ -352,14 +352,14 @@ class Network:
         """The chosen ridge parameter."""
     @property
     def validation_nrmse(self) -> Optional[Vector]:
-        """Per-joint validation NRMSE after training or the last ``grow``; ``None`` when
-        loaded."""
+        """Per-joint validation NRMSE (cross-validated by default) after training or the last
+        ``grow``; ``None`` when loaded or after a growth under cross-validation."""
     @property
     def samples(self) -> Optional[int]:
         """Training rows behind the network."""
     @property
     def validation_samples(self) -> Optional[int]:
-        """Validation rows (``None`` when loaded)."""
+        """Validation rows (``None`` when loaded, 0 under cross-validation)."""
     @property
     def seconds(self) -> Optional[float]:
         """Wall time of the fit or of the last ``grow`` (``None`` when loaded)."""
@@ -377,14 +377,17 @@ def train(
     input_filter_hz: float = 0.0,
     validation_fraction: Optional[float] = None,
     validation: Optional[FreeMotionData] = None,
+    folds: int = 5,
     seed: Optional[int] = None,
     width_scale: float = 2.0,
     width_neighbours: int = 8,
     nominal: Optional[Union[Model, "Identification"]] = None,
 ) -> Network:
-    """Fits the learned observer's network to free-motion data (``admittance train``): the last
-    ``validation_fraction`` (default 0.2) of the rows, or a separate ``validation`` set, choose
-    the ridge parameter and give ``validation_nrmse``. ``nominal``: learn the hybrid observer's
+    """Fits the learned observer's network to free-motion data (``admittance train``): a
+    separate ``validation`` set, else blocked cross-validation over ``folds`` contiguous
+    stretches of the rows (each scored by a fit on the others), chooses the ridge parameter
+    and gives ``validation_nrmse``; every row of ``data`` trains. ``validation_fraction``:
+    hold out the last rows instead (the tail of the same motion; compatibility only). ``nominal``: learn the hybrid observer's
     residual ``tau - RNEA_nominal`` instead of ``tau``. Releases the GIL."""
 
 def load_network(path: StrPath) -> Network:
