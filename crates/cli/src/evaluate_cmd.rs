@@ -166,6 +166,8 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         .or_else(|| residual.as_ref().map(|r| r.workspace()))
         .unwrap_or_default();
     let (mut tau_sum, mut tau_sq) = (vec![0.0; n], vec![0.0; n]);
+    // The residual network's coverage of each evaluated sample (1: inside its data).
+    let (mut coverage_sum, mut outside) = (0.0, 0usize);
     for k in first..data.len() {
         let r = k * n..(k + 1) * n;
         let (q, qd, qdd, tau) = (
@@ -204,6 +206,11 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             statics[s].add(&out);
             s += 1;
             if let Some(r) = &residual {
+                let c = r
+                    .coverage(&x, &mut ws)
+                    .map_err(|e| CliError::input(e.to_string()))?;
+                coverage_sum += c;
+                outside += usize::from(c < 1.0);
                 let full = est.clone();
                 r.predict_into(&x, &mut est, &mut ws)
                     .map_err(|e| CliError::input(e.to_string()))?;
@@ -278,6 +285,14 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             rms,
             nmse,
             joints.join(" ")
+        );
+    }
+    if residual.is_some() {
+        text += &format!(
+            "residual network coverage: mean {:.3}, {} of {} samples outside its training data (correction faded)\n",
+            coverage_sum / count,
+            outside,
+            data.len() - first
         );
     }
     crate::write_stdout(&text);

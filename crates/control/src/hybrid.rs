@@ -39,6 +39,7 @@ pub struct HybridObserver {
     x: Vec<f64>,
     delta_hat: Vec<f64>,
     corrected_tau: Vec<f64>,
+    coverage: f64,
 }
 
 impl HybridObserver {
@@ -66,7 +67,15 @@ impl HybridObserver {
             x: vec![0.0; 3 * n],
             delta_hat: vec![0.0; n],
             corrected_tau: vec![0.0; n],
+            coverage: 1.0,
         })
+    }
+
+    /// How well the last input lies inside the residual network's training data, in
+    /// [0, 1] (`BroadModel::coverage`): 1 inside, falling to 0 away from every centre. The
+    /// correction is faded by it, so outside its data the hybrid is the momentum observer.
+    pub fn coverage(&self) -> f64 {
+        self.coverage
     }
 
     /// The residual network.
@@ -101,8 +110,11 @@ impl HybridObserver {
         self.x[..n].copy_from_slice(input.q);
         self.x[n..2 * n].copy_from_slice(input.qdot);
         self.x[2 * n..].copy_from_slice(input.qddot);
-        self.residual
-            .predict_into(&self.x, &mut self.delta_hat, &mut self.ws)
+        // Faded to zero outside the training data (a network without a recorded coverage
+        // threshold predicts as it always did).
+        self.coverage = self
+            .residual
+            .predict_faded_into(&self.x, &mut self.delta_hat, &mut self.ws)
             .map_err(|_| Fault::Internal("hybrid observer: prediction"))?;
         for i in 0..n {
             let c = input.tau_commanded[i] - self.delta_hat[i];
