@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Pinocchio's joint-torque regressor on the oracle arms (fixtures of admittance-dynamics).
 
-Writes crates/dynamics/tests/fixtures/pinocchio/regressor/<name>.json for every random arm of
+Writes crates/dynamics/tests/fixtures/regressor/<name>.json for every random arm of
 arms/ and for models/baxter_left_arm.urdf: random states
 (q, v, a) with `pin.computeJointTorqueRegressor` and `pin.rnea`, after checking that
 `Y @ pi == rnea` with pi from `Inertia.toDynamicParameters` (Pinocchio's own consistency).
@@ -19,7 +19,7 @@ import generate_fixtures as gf  # noqa: E402  (the Arm class and the JSON layout
 
 SEED = 20261125
 CASES = 4
-OUT = os.path.join(gf.OUT_DIR, "regressor")
+OUT = os.path.join(os.path.dirname(gf.OUT_DIR), "regressor")
 
 
 def cases(arm, rng):
@@ -54,8 +54,8 @@ def main():
     for name in names:
         path = os.path.join(gf.ARMS_DIR, name + ".urdf")
         tip = json.load(open(os.path.join(gf.OUT_DIR, name + ".json")))["tip"]
-        write(name, "../../arms/%s.urdf" % name, gf.Arm(path, "base_link", tip), rng)
-    write("baxter_left_arm", "../../../../../../models/baxter_left_arm.urdf",
+        write(name, "../arms/%s.urdf" % name, gf.Arm(path, "base_link", tip), rng)
+    write("baxter_left_arm", "../../../../../models/baxter_left_arm.urdf",
           gf.Arm(gf.BAXTER, "base", "left_hand"), rng)
     print("pinocchio %s: regressor of %d arms x %d cases, Y pi == rnea checked"
           % (pin.__version__, len(names) + 1, CASES))

@@ -1,5 +1,5 @@
 //! The joint-torque regressor against Pinocchio's `computeJointTorqueRegressor` (fixtures in
-//! tests/fixtures/pinocchio/regressor, made by scripts/oracle/generate_regressor_fixtures.py)
+//! tests/fixtures/regressor, made by scripts/oracle/generate_regressor_fixtures.py)
 //! and against our own RNEA, and the base parameters' rank.
 
 mod common;
@@ -31,7 +31,7 @@ fn rows(r: &[Vec<f64>]) -> DMatrix<f64> {
 
 #[test]
 fn regressor_equals_pinocchio_on_every_fixture_arm() {
-    let dir = common::fixtures_dir().join("pinocchio/regressor");
+    let dir = common::fixtures_dir().join("regressor");
     let mut paths: Vec<_> = std::fs::read_dir(&dir)
         .expect("regressor fixtures exist")
         .map(|e| e.unwrap().path())
