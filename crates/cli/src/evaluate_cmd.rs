@@ -18,6 +18,14 @@ use crate::identify_cmd::Conditioned;
 use crate::train_cmd::{non_negative_hz, positive_number};
 use crate::CliError;
 
+/// `--from`: a time in seconds, finite and >= 0.
+fn non_negative_seconds(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err("the value must be a time >= 0 s".into()),
+    }
+}
+
 #[derive(Args)]
 pub struct EvaluateArgs {
     /// Free-motion recording (CSV, docs/outputs.md).
@@ -26,7 +34,7 @@ pub struct EvaluateArgs {
     #[command(flatten)]
     chain: crate::dynamics_cmd::ChainArgs,
     /// Evaluate the rows with t >= FROM (s) only.
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz)]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_seconds, allow_negative_numbers = true)]
     from: f64,
     /// An identification file (`admittance identify`) of this arm.
     #[arg(long)]
