@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use admittance_dynamics::{rnea, Data, Identification, Model};
+use admittance_dynamics::{Identification, Model};
 use admittance_learning::broad::{fnv1a64, BroadError, Dataset};
 use admittance_scenario::{FreeMotionData, FreeMotionError};
 
@@ -89,15 +89,10 @@ pub fn arrays(
             ))
         })?;
     if let Some(model) = nominal {
-        let n = data.dof();
-        let mut d = Data::new(model);
-        for (row, target) in x.chunks_exact(3 * n).zip(y.chunks_exact_mut(n)) {
-            let tau = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
-                .map_err(|e| CliError::input(format!("nominal model: {e}")))?;
-            for (t, m) in target.iter_mut().zip(tau.iter()) {
-                *t -= m;
-            }
-        }
+        // A URDF model is an identification without joint terms: one residual rule.
+        Identification::from_model(model.clone())
+            .subtract_from(&x, &mut y)
+            .map_err(|e| CliError::input(format!("nominal model: {e}")))?;
     }
     Ok((x, y))
 }

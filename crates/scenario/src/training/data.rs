@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use admittance_dynamics::{rnea, Data, Model};
+use admittance_dynamics::{Identification, Model};
 use admittance_learning::broad::fnv1a64;
 
 use super::SimulateData;
@@ -200,7 +200,6 @@ pub(super) fn arrays(
             None,
         ));
     }
-    let n = data.dof();
     let (x, mut y) =
         crate::free_motion::observer_training_arrays(data, input_filter_hz).map_err(|e| {
             ctx.err(
@@ -210,16 +209,10 @@ pub(super) fn arrays(
             )
         })?;
     if let Some(model) = nominal {
-        let mut d = Data::new(model);
-        for k in 0..data.len() {
-            let r = k * n..(k + 1) * n;
-            let row = &x[3 * k * n..3 * (k + 1) * n];
-            let tau_model = rnea(model, &mut d, &row[..n], &row[n..2 * n], &row[2 * n..])
-                .map_err(|e| ctx.err(key, format!("nominal model: {e}"), None))?;
-            for (yi, m) in y[r].iter_mut().zip(tau_model.iter()) {
-                *yi -= m;
-            }
-        }
+        // A URDF model is an identification without joint terms: one residual rule.
+        Identification::from_model(model.clone())
+            .subtract_from(&x, &mut y)
+            .map_err(|e| ctx.err(key, format!("nominal model: {e}"), None))?;
     }
     Ok((x, y))
 }
