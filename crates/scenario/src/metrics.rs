@@ -63,6 +63,9 @@ pub struct VariantMetrics {
     /// How a learned observer's network was obtained.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub observer_training: Option<ObserverTrainingMetrics>,
+    /// The identification the momentum or hybrid observer runs on.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub identification: Option<IdentificationMetrics>,
     /// Final node count per network of the neural controller.
     pub nodes: BTreeMap<String, usize>,
     /// Final weight norm per network of the neural controller.
@@ -109,6 +112,15 @@ pub struct ObserverTrainingMetrics {
     pub training_samples: usize,
     /// Chosen ridge parameter.
     pub observer_lambda: f64,
+}
+
+/// The identified nominal model of a momentum or hybrid observer (docs/outputs.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct IdentificationMetrics {
+    /// Per joint: the identified model's RMS false torque on its validation data (N m).
+    pub identification_expected_false_torque_rms: Vec<f64>,
+    /// Whether it came from the cache (or a given file).
+    pub identification_cached: bool,
 }
 
 /// Experiment C (dynamic nodes).
@@ -285,6 +297,10 @@ mod tests {
                 observer_model_cached: false,
                 training_samples: 1,
                 observer_lambda: 1e-3,
+            }),
+            identification: Some(IdentificationMetrics {
+                identification_expected_false_torque_rms: vec![0.1],
+                identification_cached: false,
             }),
             weight_norm_final: Some(BTreeMap::new()),
             dynamic_nodes: Some(DynamicNodeMetrics {

@@ -78,6 +78,7 @@ fn simulate_variant(
         mut oracle_admittance,
         observer_training,
         observer_validation,
+        identification,
         arm_warnings,
     } = parts;
     let n = joints.len();
@@ -219,6 +220,7 @@ fn simulate_variant(
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
+    run.metrics.identification = identification;
     Ok(run)
 }
 

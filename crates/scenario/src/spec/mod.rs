@@ -162,6 +162,14 @@ pub struct TrainingSpec {
     /// Whether to use and fill the cache.
     #[serde(default = "default_true")]
     pub cache: bool,
+    /// Identify the arm on the training data (docs/method.md section 8; settings chosen on
+    /// the validation data) and run `momentum` and `hybrid` on the identification: the
+    /// momentum observer's nominal model is the identified one with its joint terms, and
+    /// the hybrid's network learns what the identification misses. The file is written to
+    /// the cache folder. Default false: the nominal model is the URDF with
+    /// `observer.nominal_inertia_scale`.
+    #[serde(default)]
+    pub identify: bool,
 }
 
 fn default_nodes() -> usize {
