@@ -60,6 +60,13 @@ pub struct VariantMetrics {
     pub admittance_error_rms: Option<Vec<f64>>,
     /// Observer updates that faulted.
     pub observer_faults: usize,
+    /// Lowest coverage of the observer's input by its network's training data over the
+    /// evaluation window (hybrid; 1 inside the data, 0 far outside).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_coverage_min: Option<f64>,
+    /// Mean coverage over the evaluation window.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_coverage_mean: Option<f64>,
     /// How a learned observer's network was obtained.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub observer_training: Option<ObserverTrainingMetrics>,
@@ -290,6 +297,8 @@ mod tests {
             diverged_at: Some(1.0),
             external_torque_nrmse: Some(0.5),
             admittance_error_rms: Some(vec![0.0]),
+            estimate_coverage_min: Some(1.0),
+            estimate_coverage_mean: Some(1.0),
             observer_training: Some(ObserverTrainingMetrics {
                 train_seconds: 1.0,
                 observer_nodes: 1,

@@ -102,6 +102,9 @@ fn simulate_variant(
         closed_loop.neural().is_some(),
         with_hand,
     );
+    if closed_loop.estimate_coverage().is_some() {
+        recorder.record_coverage();
+    }
     let mut gather = Gather::new(&model, &joints, &effort, steps, with_hand);
     let mut kinematics = HandKinematics::new(&model);
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -176,6 +179,7 @@ fn simulate_variant(
                 q_r_oracle: oracle_admittance.as_ref().map(|a| a.q_r()),
                 ee_error,
                 hand: hand_estimate.map(|f_hat| (&hand_force, f_hat)),
+                coverage: closed_loop.estimate_coverage(),
             });
         }
         if recorder.wants(k) {
@@ -204,6 +208,7 @@ fn simulate_variant(
                 nodes: closed_loop.neural().map(|nn| nn.node_count(NetworkId::F)),
                 hand: hand_estimate
                     .map(|f_hat| [&hand_force[..], f_hat, &p_hand[..], &p_ref[..], &p_d[..]]),
+                coverage: closed_loop.estimate_coverage(),
             });
         }
     }

@@ -24,7 +24,7 @@
 //! [admittance]               # optional: admittance model and reference saturation
 //! [task_admittance]          # optional, instead: the hand's admittance (linear, angular, axes, IK)
 //! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz, input_filter_hz, warmup
-//! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache
+//! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache; identify (momentum and hybrid on the identified arm)
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [variants.NAME]            # overrides of any of the above, per variant
