@@ -68,11 +68,18 @@ pub(crate) fn assemble(
     }
     crate::budget::check_run(&ctx, &scenario, joints.len(), &options.limits)?;
     let n = model.nq();
-    let trajectory = Trajectory::new(
-        &scenario.trajectory,
-        &joints,
-        &crate::spec::mid_range(&model),
-    );
+    let trajectory = match &scenario.trajectory.excitation {
+        Some(settings) => {
+            let designed = admittance_dynamics::excitation(&model, settings)
+                .map_err(|e| ctx.err("trajectory.excitation", e.to_string(), None))?;
+            Trajectory::excitation(designed.base_frequency, designed.series)
+        }
+        None => Trajectory::new(
+            &scenario.trajectory,
+            &joints,
+            &crate::spec::mid_range(&model),
+        ),
+    };
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     trajectory.eval(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
 

@@ -97,7 +97,7 @@ pub struct SineSpec {
 }
 
 /// The desired joint trajectory `q_d(t)`: a pose (`offset`, or `waypoints` to move between
-/// poses) plus sines.
+/// poses) plus sines; or, alone, an `excitation` designed for identification.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrajectorySpec {
@@ -114,6 +114,16 @@ pub struct TrajectorySpec {
     /// Sinusoidal components.
     #[serde(default)]
     pub sines: Vec<SineSpec>,
+    /// An excitation for identification (docs/method.md section 8; `admittance excite`): a
+    /// finite Fourier series per joint, periodic, from rest, inside the arm's position,
+    /// velocity and acceleration limits, optimised for the condition number of the base
+    /// regressor; designed when the scenario is assembled. Its table takes
+    /// `ExcitationSettings` (`period`, `harmonics`, `acceleration_limit`,
+    /// `position_margin`, `seed`, `iterations`, and `duration`/`rate_hz` of the samples the
+    /// design is scored on). Exclusive with `offset`, `waypoints` and `sines`. Default:
+    /// absent.
+    #[serde(default)]
+    pub excitation: Option<admittance_dynamics::ExcitationSettings>,
 }
 
 /// Where the training of a learned observer comes from (`[observer.training]`).

@@ -41,6 +41,21 @@ impl Scenario {
     }
 
     fn validate_trajectory(&self, joints: &[String], out: &mut Vec<Invalid>) {
+        let t = &self.trajectory;
+        if t.excitation.is_some()
+            && (t.offset.is_some() || !t.waypoints.is_empty() || !t.sines.is_empty())
+        {
+            out.push(
+                Invalid::new(
+                    "trajectory.excitation",
+                    "is the whole trajectory: it does not go with offset, waypoints or sines",
+                )
+                .hint("keep either the excitation table or the pose and sines"),
+            );
+        }
+        if let Some(Err(e)) = t.excitation.as_ref().map(|e| e.validate()) {
+            out.push(Invalid::new("trajectory.excitation", e.to_string()));
+        }
         let n = joints.len();
         if let Some(offset) = &self.trajectory.offset {
             if offset.len() != n {
