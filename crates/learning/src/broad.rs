@@ -91,7 +91,10 @@ pub use budget::{
     check_budget, format_bytes, Budget, Estimate, FitSize, DEFAULT_MAX_FLOP,
     DEFAULT_MAX_MEMORY_BYTES,
 };
-pub use config::{BroadConfig, FrictionFeatures, GramStrategy, WidthRule};
+pub use config::{
+    BroadConfig, FrictionFeatures, GramStrategy, WidthRule, DEFAULT_FRICTION_SCALES,
+    DEFAULT_NODES,
+};
 pub use coverage::COVERAGE_QUANTILE;
 pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
 pub use destination::check_model_destination;

@@ -183,10 +183,10 @@ pub struct TrainingSpec {
 }
 
 fn default_nodes() -> usize {
-    1000
+    admittance_learning::broad::DEFAULT_NODES
 }
 fn default_friction_scales() -> Vec<f64> {
-    vec![0.01, 0.05, 0.2]
+    admittance_learning::broad::DEFAULT_FRICTION_SCALES.to_vec()
 }
 fn default_training_seed() -> u64 {
     admittance_learning::broad::BroadConfig::default().seed

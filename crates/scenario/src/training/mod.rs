@@ -149,14 +149,11 @@ pub(crate) fn observer_network(
     )?;
     let config = BroadConfig {
         nodes: spec.nodes,
-        friction: if spec.friction_features {
-            FrictionFeatures {
-                columns: (n..2 * n).collect(),
-                scales: spec.friction_scales.clone(),
-            }
-        } else {
-            FrictionFeatures::none()
-        },
+        friction: FrictionFeatures::for_observer(
+            n,
+            spec.friction_features,
+            Some(spec.friction_scales.clone()),
+        ),
         seed: spec.seed,
         widths: WidthRule::Knn {
             k: spec.width_neighbours,
