@@ -36,6 +36,7 @@ mod error;
 mod free_motion;
 mod gather;
 mod hand;
+mod hand_paths;
 mod health;
 mod limits;
 mod metrics;

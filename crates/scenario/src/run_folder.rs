@@ -240,7 +240,7 @@ pub fn run_scenario_variants(
     let evaluation_start = source
         .resolve::<Scenario>(selected[0].as_deref())?
         .evaluation_start;
-    crate::hand::across_variants(&mut runs, evaluation_start);
+    crate::hand_paths::across_variants(&mut runs, evaluation_start);
     let summary = summary_json(&scenario_name, &runs);
     write_folder(out_dir, path, force, |partial| {
         for run in &runs {

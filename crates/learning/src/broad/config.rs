@@ -1,6 +1,6 @@
 //! Configuration of the broad network fit (docs/method.md sections 5 and 7).
 
-use super::budget::Budget;
+use super::limits::Budget;
 use super::error::BroadError;
 use serde::{Deserialize, Serialize};
 
