@@ -45,6 +45,7 @@ mod recorder;
 mod robot;
 mod run_folder;
 mod runner;
+mod settings;
 mod series;
 mod source;
 mod spec;

@@ -44,6 +44,8 @@ pub struct VariantRun {
     pub divergence: Option<Divergence>,
     /// What the URDF loader accepted with a warning (`file:line: element: problem`).
     pub arm_warnings: Vec<String>,
+    /// The variant's settings as the run applied them (`settings.json`).
+    pub settings: admittance_runfolder::settings::VariantSettings,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -106,6 +108,8 @@ fn simulate_variant(
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
     let variant_name = ctx.variant.unwrap_or("base");
+    let settings =
+        crate::settings::variant_settings(variant_name, &scenario, &joints, &plant, &closed_loop);
     let progress_stride = (steps / 100).max(1);
 
     for k in 0..steps {
@@ -219,6 +223,7 @@ fn simulate_variant(
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
+    run.settings = settings;
     Ok(run)
 }
 
@@ -263,5 +268,6 @@ fn finish(
         observer_validation,
         divergence: health.divergence,
         arm_warnings: Vec::new(),
+        settings: Default::default(),
     })
 }
