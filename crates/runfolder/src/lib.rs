@@ -24,4 +24,4 @@ pub mod summary;
 
 mod atomic;
 
-pub use atomic::{temp_sibling, write_atomic};
+pub use atomic::{commit_guard, temp_sibling, write_atomic};

@@ -394,6 +394,9 @@ fn write_folder(
         let _ = std::fs::remove_dir_all(&partial);
         return Err(e);
     }
+    // From here to the end the partial folder may be the only complete copy: an interrupt's
+    // clean-up waits (admittance_runfolder::commit_guard).
+    let _commit = admittance_runfolder::commit_guard();
     let _ = std::fs::remove_file(&marker);
     let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
     let replaced = std::fs::symlink_metadata(out_dir).is_ok();
