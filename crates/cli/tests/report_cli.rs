@@ -396,7 +396,10 @@ fn a_renamed_panda_deadzone_scenario_gets_the_deadzone_report() {
             "urdf = \"../models/franka_panda.urdf\"",
             &format!(
                 "urdf = {:?}",
-                root().join("models/franka_panda.urdf").canonicalize().unwrap()
+                root()
+                    .join("models/franka_panda.urdf")
+                    .canonicalize()
+                    .unwrap()
             ),
         );
     let scenario = dir.join("trial.toml");
@@ -426,16 +429,31 @@ fn a_renamed_panda_deadzone_scenario_gets_the_deadzone_report() {
         md.starts_with("# Experiment A: deadzone compensation (scenario `my_arm_trial`)"),
         "{md}"
     );
-    assert!(md.contains("panda_joint1 tracking RMSE, compensated / PD"), "{md}");
-    assert!(!md.contains("settings.json"), "a new folder has its settings: {md}");
-    for f in ["fig08_end_effector_error", "fig11_s0_errors", "fig12_s0_control_inputs"] {
-        assert!(out.join("figures").join(format!("{f}.png")).is_file(), "{f}");
+    assert!(
+        md.contains("panda_joint1 tracking RMSE, compensated / PD"),
+        "{md}"
+    );
+    assert!(
+        !md.contains("settings.json"),
+        "a new folder has its settings: {md}"
+    );
+    for f in [
+        "fig08_end_effector_error",
+        "fig11_s0_errors",
+        "fig12_s0_control_inputs",
+    ] {
+        assert!(
+            out.join("figures").join(format!("{f}.png")).is_file(),
+            "{f}"
+        );
     }
     let svg = std::fs::read_to_string(out.join("figures/fig12_s0_control_inputs.svg")).unwrap();
-    assert!(svg.contains("joint panda_joint1"), "Fig 12 shows the deadzone joint");
+    assert!(
+        svg.contains("joint panda_joint1"),
+        "Fig 12 shows the deadzone joint"
+    );
     let settings: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("settings.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("settings.json")).unwrap()).unwrap();
     assert_eq!(settings["format"], "admittance-run-settings");
     assert_eq!(
         settings["variants"][1]["deadzones"][0],
@@ -447,16 +465,24 @@ fn a_renamed_panda_deadzone_scenario_gets_the_deadzone_report() {
     // The same folder without settings.json (written by an earlier build): still the
     // deadzone report, read from scenario.toml, and the report says so.
     std::fs::remove_file(out.join("settings.json")).unwrap();
-    let (code, _, err) = admittance(&["report", out.to_str().unwrap(), "--no-recording", "--quiet"]);
+    let (code, _, err) =
+        admittance(&["report", out.to_str().unwrap(), "--no-recording", "--quiet"]);
     assert_eq!(code, 0, "{err}");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.starts_with("# Experiment A"), "{md}");
     assert!(md.contains("has no `settings.json`"), "{md}");
     // A malformed one is refused with the file named (exit 3), never a panic.
-    std::fs::write(out.join("settings.json"), "{\"format\": \"admittance-run-settings\", \"format_version\": 7}").unwrap();
+    std::fs::write(
+        out.join("settings.json"),
+        "{\"format\": \"admittance-run-settings\", \"format_version\": 7}",
+    )
+    .unwrap();
     let (code, _, err) = admittance(&["report", out.to_str().unwrap(), "--quiet"]);
     assert_eq!(code, 3, "{err}");
-    assert!(err.contains("settings.json") && err.contains("format_version 7"), "{err}");
+    assert!(
+        err.contains("settings.json") && err.contains("format_version 7"),
+        "{err}"
+    );
 }
 
 #[test]

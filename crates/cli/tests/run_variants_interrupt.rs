@@ -157,7 +157,10 @@ fn ctrl_c_while_writing_removes_the_partial_folder() {
             child.try_wait().unwrap().is_none(),
             "the run ended before its partial folder was seen"
         );
-        assert!(started.elapsed() < Duration::from_secs(120), "no partial folder");
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no partial folder"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
     let status = Command::new("kill")

@@ -116,8 +116,7 @@ pub fn deadzone_groups(folder: &RunFolder) -> Vec<DeadzoneGroup> {
                 .map(|x| x.name.clone())
         };
         let with = find(&|x| x.controller == rs::CONTROLLER_NEURAL && x.deadzone_compensation);
-        let without =
-            find(&|x| x.controller == rs::CONTROLLER_NEURAL && !x.deadzone_compensation);
+        let without = find(&|x| x.controller == rs::CONTROLLER_NEURAL && !x.deadzone_compensation);
         let pd = find(&|x| x.controller == rs::CONTROLLER_PD);
         let rmse = |variant: &Option<String>, joint: &str| {
             let k = folder.joints.iter().position(|j| j == joint)?;

@@ -79,7 +79,10 @@ fn vec3(value: Option<&toml::Value>) -> Option<[f64; 3]> {
 
 fn window(table: &toml::Table) -> (f64, Option<f64>) {
     let get = |k: &str, default: f64| table.get(k).and_then(number).unwrap_or(default);
-    (get("t_start", 0.0), rs::window_end(get("t_end", f64::INFINITY)))
+    (
+        get("t_start", 0.0),
+        rs::window_end(get("t_end", f64::INFINITY)),
+    )
 }
 
 fn open_end(t_end: Option<f64>) -> f64 {

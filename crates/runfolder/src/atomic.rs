@@ -9,7 +9,9 @@ static COMMIT: Mutex<()> = Mutex::new(());
 /// (the command line's Ctrl-C handler, which takes it too) never removes a temporary
 /// folder between those two renames, when it is the only complete copy.
 pub fn commit_guard() -> MutexGuard<'static, ()> {
-    COMMIT.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    COMMIT
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// A hidden temporary sibling of `path` for this process: `.NAME.tmp-PID`.

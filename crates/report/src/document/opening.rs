@@ -78,7 +78,11 @@ fn deadzone_rows(folder: &RunFolder, g: &DeadzoneGroup, first: bool, rows: &mut 
     } else {
         format!(" (second deadzone{band}; not in the paper)")
     };
-    fn value<'a>(folder: &RunFolder, name: &'a Option<String>, metric: &str) -> Option<(&'a str, f64)> {
+    fn value<'a>(
+        folder: &RunFolder,
+        name: &'a Option<String>,
+        metric: &str,
+    ) -> Option<(&'a str, f64)> {
         let n = name.as_deref()?;
         num(folder.variant(n)?, metric).map(|x| (n, x))
     }
@@ -108,7 +112,11 @@ fn deadzone_rows(folder: &RunFolder, g: &DeadzoneGroup, first: bool, rows: &mut 
         if let Some((text, ok)) = rmse_ratio(folder, a, b, &g.joint) {
             rows.push(row(
                 &format!("{s} tracking RMSE, compensated / uncompensated{tag}"),
-                if first { "smaller with compensation" } else { "–" },
+                if first {
+                    "smaller with compensation"
+                } else {
+                    "–"
+                },
                 format!("{text}{}", if first { band.as_str() } else { "" }),
                 yes_no(ok),
             ));
@@ -174,7 +182,11 @@ fn best_estimate(folder: &RunFolder, metric: &str) -> Option<String> {
         .variants
         .iter()
         .filter(|v| !is_oracle(folder, v))
-        .filter_map(|v| num(v, metric).filter(|x| x.is_finite()).map(|x| (v.name.as_str(), x)))
+        .filter_map(|v| {
+            num(v, metric)
+                .filter(|x| x.is_finite())
+                .map(|x| (v.name.as_str(), x))
+        })
         .collect();
     ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
     let (name, x) = *ranked.first()?;
@@ -258,11 +270,7 @@ fn admittance(folder: &RunFolder) -> (String, Vec<Row>) {
             rows.push(row(
                 "time to train the observer's network",
                 "5.088 s (1000 nodes, the authors' computer)",
-                format!(
-                    "{} s (`{}`{nodes}{rows_used}; {when})",
-                    fmt_num(s),
-                    v.name
-                ),
+                format!("{} s (`{}`{nodes}{rows_used}; {when})", fmt_num(s), v.name),
                 "–",
             ));
         }
@@ -477,7 +485,10 @@ fn hand_contact(folder: &RunFolder) -> (String, Vec<Row>) {
             .collect();
         if !parts.is_empty() {
             rows.push(row(
-                &format!("largest contact force against the oracle's ({} N, `{oracle_name}`)", fmt_num(peak)),
+                &format!(
+                    "largest contact force against the oracle's ({} N, `{oracle_name}`)",
+                    fmt_num(peak)
+                ),
                 "–",
                 parts.join("; "),
                 "–",

@@ -96,11 +96,15 @@ fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
             variant("nn_compensated", clean(json!({}))),
             variant(
                 "nn_uncompensated",
-                clean(json!({"tracking_rmse": [0.002, 0.0004], "ee_error_max": 0.003, "ee_error_rms": 0.002})),
+                clean(
+                    json!({"tracking_rmse": [0.002, 0.0004], "ee_error_max": 0.003, "ee_error_rms": 0.002}),
+                ),
             ),
             variant(
                 "pd",
-                clean(json!({"tracking_rmse": [0.006, 0.0004], "ee_error_max": 0.005, "ee_error_rms": 0.004})),
+                clean(
+                    json!({"tracking_rmse": [0.006, 0.0004], "ee_error_max": 0.005, "ee_error_rms": 0.004}),
+                ),
             ),
         ],
         &format!("description = \"Experiment A\"\n{DEADZONE}"),
@@ -126,7 +130,9 @@ fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
         "{top}"
     );
     assert!(
-        top.contains("`nn_compensated` 9.000e-4 m; `nn_uncompensated` 0.002000 m; `pd` 0.004000 m | yes |"),
+        top.contains(
+            "`nn_compensated` 9.000e-4 m; `nn_uncompensated` 0.002000 m; `pd` 0.004000 m | yes |"
+        ),
         "{top}"
     );
     assert!(top.contains("| yes |"), "{top}");
@@ -187,8 +193,14 @@ fn metrics_tables_have_units_windows_joint_columns_and_the_scenario_order() {
     let f = folder(
         "deadzone",
         vec![
-            variant("nn_compensated", clean(json!({"deadzone_time_fraction": [0.04, 0.0]}))),
-            variant("nn_uncompensated", clean(json!({"deadzone_time_fraction": [0.036, 0.0]}))),
+            variant(
+                "nn_compensated",
+                clean(json!({"deadzone_time_fraction": [0.04, 0.0]})),
+            ),
+            variant(
+                "nn_uncompensated",
+                clean(json!({"deadzone_time_fraction": [0.036, 0.0]})),
+            ),
             variant("pd", clean(json!({"deadzone_time_fraction": [0.05, 0.0]}))),
         ],
         &format!("evaluation_start = 20\n{DEADZONE}"),
@@ -389,15 +401,32 @@ fn a_compensated_controller_that_does_not_beat_the_others_says_no() {
     let f = folder(
         "deadzone",
         vec![
-            variant("nn_compensated", clean(json!({"tracking_rmse": [0.004, 0.0003], "ee_error_rms": 0.003}))),
-            variant("nn_uncompensated", clean(json!({"tracking_rmse": [0.002, 0.0004], "ee_error_rms": 0.002}))),
-            variant("pd", clean(json!({"tracking_rmse": [0.003, 0.0004], "ee_error_rms": 0.004}))),
+            variant(
+                "nn_compensated",
+                clean(json!({"tracking_rmse": [0.004, 0.0003], "ee_error_rms": 0.003})),
+            ),
+            variant(
+                "nn_uncompensated",
+                clean(json!({"tracking_rmse": [0.002, 0.0004], "ee_error_rms": 0.002})),
+            ),
+            variant(
+                "pd",
+                clean(json!({"tracking_rmse": [0.003, 0.0004], "ee_error_rms": 0.004})),
+            ),
         ],
         DEADZONE,
     );
     let top = opening(&f);
-    assert!(top.contains("×2.00 (`nn_compensated` / `nn_uncompensated`), deadzone [-0.49, 0.49] N m | no |"), "{top}");
-    assert!(top.contains("×1.33 (`nn_compensated` / `pd`) | no |"), "{top}");
+    assert!(
+        top.contains(
+            "×2.00 (`nn_compensated` / `nn_uncompensated`), deadzone [-0.49, 0.49] N m | no |"
+        ),
+        "{top}"
+    );
+    assert!(
+        top.contains("×1.33 (`nn_compensated` / `pd`) | no |"),
+        "{top}"
+    );
     assert!(top.contains("`pd` 0.004000 m | no |"), "{top}");
 }
 
@@ -410,10 +439,17 @@ fn an_old_folder_says_where_its_settings_came_from() {
     );
     let top = opening(&f);
     assert!(
-        top.contains("has no `settings.json`") && top.contains("read from scenario.toml") && top.contains("rerun the scenario"),
+        top.contains("has no `settings.json`")
+            && top.contains("read from scenario.toml")
+            && top.contains("rerun the scenario"),
         "{top}"
     );
     // Still the deadzone report: the classification reads scenario.toml's content.
     assert!(top.starts_with("# Experiment A"), "{top}");
-    assert!(!opening(&folder("deadzone", vec![variant("nn_compensated", clean(json!({})))], DEADZONE)).contains("settings.json"));
+    assert!(!opening(&folder(
+        "deadzone",
+        vec![variant("nn_compensated", clean(json!({})))],
+        DEADZONE
+    ))
+    .contains("settings.json"));
 }

@@ -11,9 +11,9 @@ use super::common::{
     compared, extra, figure, joint_col, last_window, line, panel, planned_joint, short, time,
     tracking, variant,
 };
-use crate::experiment::{deadzone_groups, DeadzoneGroup};
 use super::model::{Figure, Line, Marker, Panel, Planned};
 use super::Arm;
+use crate::experiment::{deadzone_groups, DeadzoneGroup};
 use crate::folder::{RunFolder, Variant};
 use crate::number::setting;
 
@@ -67,8 +67,14 @@ fn deadzone_band(folder: &RunFolder, variant: &str, joint: &str) -> Vec<Marker> 
 
 fn control_inputs(folder: &RunFolder, v: &Variant, j: &str) -> Result<Panel, String> {
     let t = time(v)?;
+    let range = last_window(t, 6.0);
+    // The run's own length when it is shorter than the paper's window.
+    let span = match range {
+        Some((a, b)) if b - a < 6.0 - 1e-9 => "whole run".to_string(),
+        _ => "last 6 s".to_string(),
+    };
     let mut p = panel(
-        format!("joint {}, variant {}, last 6 s", short(j), v.name),
+        format!("joint {}, variant {}, {span}", short(j), v.name),
         "torque (N m)",
         vec![
             line(
@@ -88,7 +94,7 @@ fn control_inputs(folder: &RunFolder, v: &Variant, j: &str) -> Result<Panel, Str
         ],
     );
     p.hlines = deadzone_band(folder, &v.name, j);
-    p.x_range = last_window(t, 6.0);
+    p.x_range = range;
     Ok(p)
 }
 
@@ -286,7 +292,10 @@ pub fn plan(folder: &RunFolder, arm: Arm<'_>) -> Vec<Planned> {
         planned_joint(11, "s0_errors", j, errors(folder, g, "11")),
         planned_joint(12, "s0_control_inputs", j, inputs(folder, g, "12")),
     ];
-    if let Some(b) = groups.get(1).filter(|b| b.with.is_some() && b.without.is_some()) {
+    if let Some(b) = groups
+        .get(1)
+        .filter(|b| b.with.is_some() && b.without.is_some())
+    {
         let band = folder
             .deadzone(b.with.as_deref().unwrap_or_default(), &b.joint)
             .map_or(String::new(), |(l, r)| {

@@ -359,8 +359,7 @@ fn experiment_b_draws_fig_13_and_14_each_from_its_own_data() {
         .collect();
     assert_eq!(ids, [("13", true), ("14", false), ("15", false)]);
     // A validation run's data are the validation trajectory, never Fig 13's.
-    let mut validation_folder =
-        folder_with("free_motion_validation", &[("base", t.clone())], DATA);
+    let mut validation_folder = folder_with("free_motion_validation", &[("base", t.clone())], DATA);
     let other = table(&["q"], &[], 12);
     validation_folder.free_motion = vec![("free_motion.csv".into(), other.clone())];
     let validation = plan(&validation_folder, Err("unused".into()));
@@ -538,8 +537,16 @@ fn task_space_runs_get_the_hand_contact_figures() {
 fn tracking_table(rows: usize, error: &dyn Fn(&str) -> f64) -> Table {
     let mut t = table(&ALL, &["ee_error"], rows);
     for j in J {
-        let r = t.columns.iter().position(|c| *c == format!("q_r.{j}")).unwrap();
-        let q = t.columns.iter().position(|c| *c == format!("q.{j}")).unwrap();
+        let r = t
+            .columns
+            .iter()
+            .position(|c| *c == format!("q_r.{j}"))
+            .unwrap();
+        let q = t
+            .columns
+            .iter()
+            .position(|c| *c == format!("q.{j}"))
+            .unwrap();
         let e = error(j);
         t.data[q] = t.data[r].iter().map(|x| x - e).collect();
     }
@@ -562,15 +569,27 @@ fn a_renamed_deadzone_scenario_gets_the_deadzone_report_for_its_deadzone_joint()
         &[("linear", t.clone()), ("on", t.clone()), ("off", t)],
         toml,
     );
-    for (name, rmse) in [("on", [0.001, 0.002]), ("off", [0.001, 0.02]), ("linear", [0.003, 0.03])] {
+    for (name, rmse) in [
+        ("on", [0.001, 0.002]),
+        ("off", [0.001, 0.02]),
+        ("linear", [0.003, 0.03]),
+    ] {
         let v = f.variants.iter_mut().find(|v| v.name == name).unwrap();
-        v.metrics.insert("tracking_rmse".into(), serde_json::json!(rmse));
+        v.metrics
+            .insert("tracking_rmse".into(), serde_json::json!(rmse));
     }
-    assert_eq!(crate::experiment::Experiment::of(&f), crate::experiment::Experiment::Deadzone);
+    assert_eq!(
+        crate::experiment::Experiment::of(&f),
+        crate::experiment::Experiment::Deadzone
+    );
     let groups = crate::experiment::deadzone_groups(&f);
     assert_eq!(groups.len(), 1);
     assert_eq!(
-        (groups[0].with.as_deref(), groups[0].without.as_deref(), groups[0].pd.as_deref()),
+        (
+            groups[0].with.as_deref(),
+            groups[0].without.as_deref(),
+            groups[0].pd.as_deref()
+        ),
         (Some("on"), Some("off"), Some("linear"))
     );
     let plan = plan(&f, Err("no URDF".into()));
@@ -581,7 +600,10 @@ fn a_renamed_deadzone_scenario_gets_the_deadzone_report_for_its_deadzone_joint()
     let band: Vec<f64> = fig12.panels[0].hlines.iter().map(|m| m.at).collect();
     assert_eq!(band, [-0.3, 0.4]);
     let fig11 = figure_of(&plan, "11");
-    assert!(fig11.panels[0].lines.iter().all(|l| l.y.iter().all(|e| (e - 0.01).abs() < 1e-12)));
+    assert!(fig11.panels[0]
+        .lines
+        .iter()
+        .all(|l| l.y.iter().all(|e| (e - 0.01).abs() < 1e-12)));
     let fig9 = plan.iter().find(|p| p.id == "9").unwrap();
     assert!(fig9.caption.contains("joint s1"), "{}", fig9.caption);
     assert!(figure_of(&plan, "9").panels[0].title.contains("variant on"));
@@ -608,7 +630,9 @@ fn the_wide_deadzone_pair_gets_figs_11b_and_12b_with_its_own_band() {
         let band: Vec<f64> = p.hlines.iter().map(|m| m.at).collect();
         assert_eq!(band, [-5.0, 5.0], "{}", p.title);
     }
-    assert!(fig12b.panels[0].title.contains("wide_on") && fig12b.panels[1].title.contains("wide_off"));
+    assert!(
+        fig12b.panels[0].title.contains("wide_on") && fig12b.panels[1].title.contains("wide_off")
+    );
 }
 
 #[test]
