@@ -8,6 +8,8 @@
 //! * [`summary`]: the format marker and version of `summary.json`, and [`summary::is_run_folder`],
 //!   which tells a folder this tool wrote from anything else (a user's folder is never
 //!   replaced by `run --out`);
+//! * [`settings`]: `settings.json`, every variant's settings as the run applied them (the
+//!   deadzone, environment windows, evaluation window, saturation bounds, kinds);
 //! * [`write_atomic`]: files are written through a temporary sibling and a rename.
 //!
 //! docs/outputs.md describes the same contract for users.
@@ -17,8 +19,9 @@
 pub mod columns;
 pub mod files;
 pub mod metrics;
+pub mod settings;
 pub mod summary;
 
 mod atomic;
 
-pub use atomic::{temp_sibling, write_atomic};
+pub use atomic::{commit_guard, temp_sibling, write_atomic};

@@ -47,6 +47,7 @@ mod robot;
 mod run_folder;
 mod runner;
 mod series;
+mod settings;
 mod source;
 mod spec;
 mod training;

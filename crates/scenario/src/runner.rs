@@ -44,6 +44,8 @@ pub struct VariantRun {
     pub divergence: Option<Divergence>,
     /// What the URDF loader accepted with a warning (`file:line: element: problem`).
     pub arm_warnings: Vec<String>,
+    /// The variant's settings as the run applied them (`settings.json`).
+    pub settings: admittance_runfolder::settings::VariantSettings,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -110,6 +112,8 @@ fn simulate_variant(
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
     let variant_name = ctx.variant.unwrap_or("base");
+    let settings =
+        crate::settings::variant_settings(variant_name, &scenario, &joints, &plant, &closed_loop);
     let progress_stride = (steps / 100).max(1);
 
     for k in 0..steps {
@@ -226,6 +230,7 @@ fn simulate_variant(
     )?;
     run.arm_warnings = arm_warnings;
     run.metrics.identification = identification;
+    run.settings = settings;
     Ok(run)
 }
 
@@ -270,5 +275,6 @@ fn finish(
         observer_validation,
         divergence: health.divergence,
         arm_warnings: Vec::new(),
+        settings: Default::default(),
     })
 }
