@@ -234,6 +234,17 @@ def estimate(observer, cond, cfg):
     return out
 
 
+def lowpass(x, cfg):
+    """The estimate's first-order low-pass (``estimate_cutoff_hz``) along the rows of ``x``."""
+    alpha = cfg.dt / (cfg.dt + 1.0 / (2 * math.pi * cfg.estimate_cutoff_hz))
+    out = np.zeros_like(x)
+    y = np.zeros(x.shape[1])
+    for k in range(len(x)):
+        y += alpha * (x[k] - y)
+        out[k] = y
+    return out
+
+
 def push_nrmse(hat, true, t, cfg):
     """The co-simulation's NRMSE: over the samples where some joint is pushed and the joints
     the push reaches, from ``evaluation_start``."""
@@ -303,21 +314,23 @@ def run_arm(name, cfg, log=print, robots=None):
         hat_push = estimate(make_observers(m, ident, nets, cfg)[label], cond_pushed, cfg)
         hats[label] = (hat_free, hat_push)
         rms, per_joint = false_torque(hat_free, free["t"], cfg)
+        w = pushed["t"] >= cfg.evaluation_start
         observers[label] = {
             "push_nrmse": push_nrmse(hat_push, pushed_true, pushed["t"], cfg),
+            "push_error_rms_per_joint": np.sqrt(np.mean((hat_push[w] - pushed_true[w]) ** 2, axis=0)).tolist(),
             "free_false_torque_rms": rms,
             "free_false_torque_rms_per_joint": per_joint,
         }
     timings["evaluate"] = time.perf_counter() - t0
     # What the residual network adds to the momentum observer on the identification.
     correction = np.concatenate([hats["hybrid"][i] - hats["momentum_identified"][i] for i in (0, 1)])
+    # The floor the estimate's filtering sets: MuJoCo's true torque through the same 5 Hz
+    # low-pass (the co-simulation's oracle).
+    oracle = lowpass(pushed_true, cfg)
     timings["total"] = time.perf_counter() - started
 
     w = pushed["t"] >= cfg.evaluation_start
     pushed_torque = float(np.sqrt(np.mean(pushed_true[w][np.abs(pushed_true[w]).sum(axis=1) > 0] ** 2)))
-    nrmse = {k: v["push_nrmse"] for k, v in observers.items()}
-    best = min((v for v in nrmse.values() if v is not None), default=None)
-    hybrid = observers["hybrid"]
     result = {
         "arm": name,
         "urdf": rel,
@@ -330,6 +343,7 @@ def run_arm(name, cfg, log=print, robots=None):
         "push_peak_n": peak,
         "push_windows": windows,
         "pushed_torque_rms": pushed_torque,
+        "pushed_torque_rms_per_joint": np.sqrt(np.mean(pushed_true[w] ** 2, axis=0)).tolist(),
         "identification": {
             "expected_false_torque_rms": ident.summary["expected_false_torque_rms"],
             "prior_false_torque_rms": ident.summary["prior_false_torque_rms"],
@@ -338,11 +352,8 @@ def run_arm(name, cfg, log=print, robots=None):
         "validation_nrmse": {k: np.asarray(v.validation_nrmse).tolist() for k, v in nets.items()},
         "observers": observers,
         "hybrid_correction_rms": float(np.sqrt(np.mean(correction**2))),
-        "bars": {
-            "hybrid_push_nrmse_le_0.2": hybrid["push_nrmse"] is not None and hybrid["push_nrmse"] <= 0.2,
-            "hybrid_lowest": hybrid["push_nrmse"] is not None and hybrid["push_nrmse"] <= best,
-            "hybrid_free_false_torque_le_0.3": hybrid["free_false_torque_rms"] <= 0.3,
-        },
+        "oracle_push_nrmse": push_nrmse(oracle, pushed_true, pushed["t"], cfg),
+        "bars": bars(observers),
         "seconds": timings,
     }
     log(
@@ -353,15 +364,28 @@ def run_arm(name, cfg, log=print, robots=None):
     return result
 
 
+def bars(observers):
+    """Issue 22's bars for one arm: the hybrid's NRMSE under pushes at most 0.2 and the lowest
+    of the observers (ties within 1e-6 relative count: its residual's correction is often
+    ~0), its false torque in free motion at most 0.3 N m rms."""
+    hybrid = observers["hybrid"]
+    best = min((v["push_nrmse"] for v in observers.values() if v["push_nrmse"] is not None), default=None)
+    return {
+        "hybrid_push_nrmse_le_0.2": hybrid["push_nrmse"] is not None and hybrid["push_nrmse"] <= 0.2,
+        "hybrid_lowest": hybrid["push_nrmse"] is not None and hybrid["push_nrmse"] <= best * (1 + 1e-6),
+        "hybrid_free_false_torque_le_0.3": hybrid["free_false_torque_rms"] <= 0.3,
+    }
+
+
 def table_markdown(results):
     """The markdown table: per arm, each observer's NRMSE under pushes / false torque in free
     motion (N m rms), the bars."""
     head = (
         "| arm | n | push peak (N) | "
         + " | ".join(f"`{o}`" for o in OBSERVERS)
-        + " | hybrid <= 0.2 and lowest | hybrid false torque <= 0.3 N m |"
+        + " | oracle | hybrid <= 0.2 and lowest | hybrid false torque <= 0.3 N m |"
     )
-    lines = [head, "|" + "---|" * (len(OBSERVERS) + 5)]
+    lines = [head, "|" + "---|" * (len(OBSERVERS) + 6)]
     for r in results:
         cells = []
         for o in OBSERVERS:
@@ -369,13 +393,15 @@ def table_markdown(results):
             nr = "-" if v["push_nrmse"] is None else f"{v['push_nrmse']:.3f}"
             text = f"{nr} / {v['free_false_torque_rms']:.3f}"
             cells.append(f"**{text}**" if o == "hybrid" else text)
-        b = r["bars"]
+        b = bars(r["observers"])
         nrmse_bar = "pass" if b["hybrid_push_nrmse_le_0.2"] and b["hybrid_lowest"] else (
             "fail (" + ", ".join(
                 x for x, ok in (("> 0.2", b["hybrid_push_nrmse_le_0.2"]), ("not lowest", b["hybrid_lowest"])) if not ok
             ) + ")"
         )
         ft = "pass" if b["hybrid_free_false_torque_le_0.3"] else "fail"
+        oracle = r.get("oracle_push_nrmse")
+        cells.append("-" if oracle is None else f"{oracle:.3f}")
         lines.append(f"| {r['arm']} | {r['n']} | {r['push_peak_n']:.1f} | " + " | ".join(cells) + f" | {nrmse_bar} | {ft} |")
     return "\n".join(lines) + "\n"
 

@@ -21,6 +21,7 @@ def main(argv=None):
     p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0)
     p.add_argument("--input-filter-hz", type=float, default=10.0)
+    p.add_argument("--estimate-cutoff-hz", type=float, default=5.0, help="the estimate's low-pass, as the co-simulation's (5)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
     a = p.parse_args(argv)
@@ -44,7 +45,7 @@ def main(argv=None):
     cfg = ArmsConfig(
         out=a.out, arms=arms, training_duration=a.training_duration, evaluation_duration=a.evaluation_duration, validation_duration=a.validation_duration,
         nodes=a.nodes, push_force=a.push_force, friction_scale=a.friction_scale,
-        input_filter_hz=a.input_filter_hz, seed=a.seed,
+        input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed,
     )
     try:
         run_all(cfg, log=lambda s: print(s, file=sys.stderr, flush=True))
