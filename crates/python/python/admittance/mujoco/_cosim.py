@@ -122,12 +122,20 @@ def _excitation(m, rng, duration, dt):
     """``adm.excitation`` (the optimised motion of ``admittance excite``) sampled at the
     control rate, with a seed drawn from ``rng``; ``at(t)`` as ``_multisine``'s."""
     seed = int(rng.integers(1, 2**31 - 1))
-    e = adm.excitation(m, duration, seed=seed, rate_hz=1.0 / dt)
+    # The excitation repeats equal periods of at most 10 s (adm.excitation's rule): one
+    # period is optimised and sampled, then repeated (equal to the whole to 1e-14; a long
+    # recording does not wait minutes for 1 kHz samples, nor Ctrl-C with it).
+    period = duration / max(math.ceil(duration / 10.0), 1)
+    steps = period / dt
+    if abs(steps - round(steps)) > 1e-6:
+        period = duration  # periods of a fractional number of steps: all of it
+    e = adm.excitation(m, period, seed=seed, period=period, rate_hz=1.0 / dt)
     q, v, a = (np.asarray(e[k]) for k in ("q", "qdot", "qddot"))
-    last = len(q) - 1
+    per = len(q) - 1
 
     def at(t):
-        k = min(int(round(t / dt)), last)
+        k = int(round(t / dt))
+        k = k % per if period < duration else min(k, per)
         return q[k], v[k], a[k]
 
     return at
