@@ -274,6 +274,59 @@ pub fn run_scenario_variants(
     })
 }
 
+/// Writes the run folder of variants run on a plant outside this crate
+/// ([`crate::ExternalVariant`], the MuJoCo co-simulation): the same files as
+/// [`run_scenario_variants`] (one CSV per variant, `summary.json`, `scenario.toml`), written
+/// the same way (a hidden partial sibling renamed into place; `out_dir` may replace only a
+/// folder this tool wrote, or an empty one, unless `force`). `scenario_text` is the scenario
+/// as run; it must load as a scenario (every variant resolved and validated as a scenario
+/// file's, so that the scenario loader and `admittance report` accept the folder).
+/// `extra` holds the summary's keys beyond the metrics (`plant`, ...). `protect` is a file
+/// the folder must not contain (the arm's URDF). Returns the summary and the failures (a
+/// divergence, a metric not finite), as [`RunSummary`] has them.
+pub fn write_external_run_folder(
+    out_dir: &Path,
+    scenario_text: &str,
+    runs: &[VariantRun],
+    extra: serde_json::Map<String, Value>,
+    force: bool,
+    protect: &Path,
+) -> Result<(Value, Vec<String>), RunError> {
+    check_out_dir(out_dir, protect, force)?;
+    let source = ScenarioSource::parse(scenario_text, files::SCENARIO)?;
+    let mut scenario_name = String::new();
+    let names = source.variant_names();
+    for run in runs {
+        if !names.contains(&run.name) {
+            return Err(RunError::Finish(format!(
+                "{}: has no [variants.{}] for the variant run",
+                files::SCENARIO,
+                run.name
+            )));
+        }
+        let s: Scenario = source.resolve(Some(&run.name))?;
+        scenario_name = s.name;
+    }
+    let mut summary = summary_json(&scenario_name, runs);
+    if let Value::Object(map) = &mut summary {
+        for (k, v) in extra {
+            map.entry(k).or_insert(v);
+        }
+    }
+    write_folder(out_dir, protect, force, |partial| {
+        for run in runs {
+            write_series_csv(&partial.join(files::series(&run.name)), &run.series)?;
+        }
+        let scenario_copy = partial.join(files::SCENARIO);
+        std::fs::write(&scenario_copy, scenario_text).map_err(io_err(&scenario_copy))?;
+        let summary_path = partial.join(files::SUMMARY);
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        std::fs::write(&summary_path, text).map_err(io_err(&summary_path))
+    })?;
+    let failures = runs.iter().flat_map(failures).collect();
+    Ok((summary, failures))
+}
+
 /// What went wrong in a variant: a divergence, or a metric that is not finite (the JSON
 /// `null` of a NaN; `external_torque_nrmse` is `null` by design without contact).
 fn failures(run: &VariantRun) -> Vec<String> {
