@@ -184,7 +184,7 @@ impl<'de, 'a, 'py> de::Deserializer<'de> for PyDe<'a, 'py> {
         }
         Err(DeError {
             message: format!(
-                "a {type_name} is not a configuration value (use numbers, strings, booleans, lists and dicts)"
+                "a `{type_name}` is not a configuration value (use numbers, strings, booleans, lists and dicts)"
             ),
             key: None,
             type_error: true,

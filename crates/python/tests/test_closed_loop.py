@@ -89,7 +89,7 @@ def test_config_errors_name_the_dotted_key(baxter):
         adm.ClosedLoop(baxter, pd_config(n, {"kind": "momentum", "warmup": "long"}))
     with pytest.raises(ValueError, match=r"key `observer\.kind`.*trained network"):
         adm.ClosedLoop(baxter, pd_config(n, {"kind": "learned"}))
-    with pytest.raises(TypeError, match=r"key `controller\.pd\.kd`: a object is not"):
+    with pytest.raises(TypeError, match=r"key `controller\.pd\.kd`: a `object` is not"):
         c = pd_config(n)
         c["controller"]["pd"]["kd"] = object()
         adm.ClosedLoop(baxter, c)
