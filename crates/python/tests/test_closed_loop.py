@@ -210,3 +210,20 @@ def test_recorder_and_run_folder(baxter, tmp_path, admittance_bin):
     with pytest.raises(ValueError, match=r"variants\.momentum"):
         adm.write_run_folder(tmp_path / "other", scenario(baxter, ["oracle"], config), recorders)
     assert (mine / "notes.txt").read_text() == "keep" and not (tmp_path / "other").exists()
+
+
+def test_the_example_of_docs_python_md_runs(monkeypatch, capsys):
+    """docs/python.md's example of `ClosedLoop` ("The whole loop") runs as printed."""
+    import re
+
+    from conftest import ROOT
+
+    text = (ROOT / "docs" / "python.md").read_text()
+    section = text[text.index("**The whole loop.**"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(ROOT)
+    namespace = {}
+    exec(compile(code, "docs/python.md", "exec"), namespace)
+    loop, q = namespace["loop"], namespace["q"]
+    assert np.abs(loop.q_r - q).max() < 1e-9 and loop.fault is None
+    assert "None" in capsys.readouterr().out
