@@ -27,7 +27,9 @@ fn loop_error(context: &str, e: LoopError) -> PyErr {
     let key = e.key();
     let mut message = format!("{context}: ");
     match &e {
-        LoopError::Invalid { message: m, hint, .. } => {
+        LoopError::Invalid {
+            message: m, hint, ..
+        } => {
             message.push_str(&format!("key `{key}`: {m}"));
             if let Some(h) = hint {
                 message.push_str(&format!("; hint: {h}"));
@@ -178,7 +180,12 @@ impl PyClosedLoop {
         self.status = Some(status);
         Ok((
             vector_out(py, self.inner.torque(), outs[0].as_ref(), "out[0]")?,
-            vector_out(py, self.inner.external_torque_estimate(), outs[1].as_ref(), "out[1]")?,
+            vector_out(
+                py,
+                self.inner.external_torque_estimate(),
+                outs[1].as_ref(),
+                "out[1]",
+            )?,
         ))
     }
 
@@ -266,7 +273,11 @@ impl PyClosedLoop {
 /// after each `ClosedLoop.step` and plant step, `finish` at the end, and `write_run_folder`
 /// with the recorders. `config` is the loop's config dict; metrics are taken over
 /// `[evaluation_start, duration]`; `VARIANT.csv` gets a row every `decimation` steps.
-#[pyclass(unsendable, module = "admittance._admittance", name = "VariantRecorder")]
+#[pyclass(
+    unsendable,
+    module = "admittance._admittance",
+    name = "VariantRecorder"
+)]
 pub struct PyVariantRecorder {
     name: String,
     gather: Option<ExternalVariant>,
@@ -292,8 +303,9 @@ impl PyVariantRecorder {
     ) -> PyResult<Self> {
         let cfg: LoopConfig = config::parse(Some(config), "VariantRecorder config")?;
         let model = &m.get().model;
-        let gather = ExternalVariant::new(&name, model, &cfg, duration, evaluation_start, decimation)
-            .map_err(|e| loop_error("VariantRecorder", e))?;
+        let gather =
+            ExternalVariant::new(&name, model, &cfg, duration, evaluation_start, decimation)
+                .map_err(|e| loop_error("VariantRecorder", e))?;
         let n = model.nq();
         Ok(PyVariantRecorder {
             name,
@@ -327,7 +339,9 @@ impl PyVariantRecorder {
             )));
         }
         let Some(status) = closed_loop.status.as_ref() else {
-            return Err(value_error("VariantRecorder.add: the loop has not stepped yet"));
+            return Err(value_error(
+                "VariantRecorder.add: the loop has not stepped yet",
+            ));
         };
         let gather = self
             .gather
@@ -481,7 +495,8 @@ pub fn write_run_folder<'py>(
             }
             other => PyValueError::new_err(other.to_string()),
         })?;
-    let text = serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let text =
+        serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     Ok((py.import("json")?.call_method1("loads", (text,))?, failures))
 }
 

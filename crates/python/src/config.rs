@@ -16,7 +16,9 @@ use numpy::PyUntypedArray;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use serde::de::{self, DeserializeOwned, DeserializeSeed, IntoDeserializer, MapAccess, SeqAccess, Visitor};
+use serde::de::{
+    self, DeserializeOwned, DeserializeSeed, IntoDeserializer, MapAccess, SeqAccess, Visitor,
+};
 
 use crate::convert::{shape_text, value_error};
 
@@ -110,7 +112,9 @@ impl<'de, 'a, 'py> de::Deserializer<'de> for PyDe<'a, 'py> {
             return visitor.visit_unit().map_err(|e: DeError| e.at(path));
         }
         if let Ok(b) = o.cast::<PyBool>() {
-            return visitor.visit_bool(b.is_true()).map_err(|e: DeError| e.at(path));
+            return visitor
+                .visit_bool(b.is_true())
+                .map_err(|e: DeError| e.at(path));
         }
         if o.is_instance_of::<PyInt>() {
             return match o.extract::<i64>() {
@@ -131,10 +135,8 @@ impl<'de, 'a, 'py> de::Deserializer<'de> for PyDe<'a, 'py> {
             return visitor.visit_string(s).map_err(|e: DeError| e.at(path));
         }
         if let Ok(d) = o.cast::<PyDict>() {
-            let items: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)> = d
-                .iter()
-                .filter(|(_, v)| !v.is_none())
-                .collect();
+            let items: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)> =
+                d.iter().filter(|(_, v)| !v.is_none()).collect();
             let access = DictAccess {
                 items: items.into_iter(),
                 value: None,
@@ -242,7 +244,10 @@ struct DictAccess<'py> {
 impl<'de, 'py> MapAccess<'de> for DictAccess<'py> {
     type Error = DeError;
 
-    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, DeError> {
+    fn next_key_seed<K: DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, DeError> {
         let Some((k, v)) = self.items.next() else {
             return Ok(None);
         };
@@ -282,7 +287,10 @@ struct ListAccess<'py> {
 impl<'de, 'py> SeqAccess<'de> for ListAccess<'py> {
     type Error = DeError;
 
-    fn next_element_seed<T: DeserializeSeed<'de>>(&mut self, seed: T) -> Result<Option<T::Value>, DeError> {
+    fn next_element_seed<T: DeserializeSeed<'de>>(
+        &mut self,
+        seed: T,
+    ) -> Result<Option<T::Value>, DeError> {
         let Some(item) = self.items.next() else {
             return Ok(None);
         };
@@ -324,7 +332,10 @@ pub fn parse<T: DeserializeOwned>(config: Option<&Bound<'_, PyAny>>, context: &s
             if !obj.is_instance_of::<PyDict>() {
                 return Err(PyTypeError::new_err(format!(
                     "{context} must be a dict (the keys of the scenario file's table), got {}",
-                    obj.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+                    obj.get_type()
+                        .name()
+                        .map(|n| n.to_string())
+                        .unwrap_or_default()
                 )));
             }
             from_py(obj, context)

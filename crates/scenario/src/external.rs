@@ -73,16 +73,23 @@ impl ExternalVariant {
     ) -> Result<Self, LoopError> {
         config.validate()?;
         if !(duration.is_finite() && duration > 0.0) {
-            return Err(LoopError::invalid("duration", format!("is {duration}, must be > 0 s")));
+            return Err(LoopError::invalid(
+                "duration",
+                format!("is {duration}, must be > 0 s"),
+            ));
         }
-        if !(evaluation_start.is_finite() && evaluation_start >= 0.0 && evaluation_start < duration) {
+        if !(evaluation_start.is_finite() && evaluation_start >= 0.0 && evaluation_start < duration)
+        {
             return Err(LoopError::invalid(
                 "evaluation_start",
                 format!("is {evaluation_start}, must be in [0, duration = {duration}) s"),
             ));
         }
         if decimation == 0 {
-            return Err(LoopError::invalid("output.decimation", "must be at least 1"));
+            return Err(LoopError::invalid(
+                "output.decimation",
+                "must be at least 1",
+            ));
         }
         let n = model.nq();
         let joints: Vec<String> = model.joints.iter().map(|j| j.name.clone()).collect();
@@ -152,7 +159,10 @@ impl ExternalVariant {
         }
         let k = self.k;
         self.k += 1;
-        let stale_sample = measurement.sample_time.iter().any(|&ts| time - ts > 0.5 * dt);
+        let stale_sample = measurement
+            .sample_time
+            .iter()
+            .any(|&ts| time - ts > 0.5 * dt);
         self.gather.after_control(k, status, lp, stale_sample);
         if self
             .gather
@@ -230,4 +240,102 @@ impl ExternalVariant {
 fn copy(dst: &mut [f64], src: &[f64]) {
     let k = dst.len().min(src.len());
     dst[..k].copy_from_slice(&src[..k]);
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use admittance_loop::LoopInput;
+
+    use super::*;
+    use crate::assemble::{assemble, Assembly};
+    use crate::progress::RunOptions;
+    use crate::runner::run_variant;
+    use crate::source::ScenarioSource;
+
+    /// The scenario runner's own plant, stepped from outside through an [`ExternalVariant`],
+    /// gives the runner's metrics and series exactly: the external path gathers with the
+    /// same code, not a copy of it.
+    #[test]
+    fn an_external_plant_gets_the_runners_metrics_and_series() {
+        let path = Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/admittance.toml"
+        ));
+        let mut source = ScenarioSource::load(path).unwrap();
+        source.set("duration=13").unwrap();
+        source.set("evaluation_start=11").unwrap();
+        let options = RunOptions::default();
+        let expected = run_variant(&source, path, Some("momentum"), &options).unwrap();
+        let simulate = |s: &ScenarioSource, p: &Path, o: &RunOptions| {
+            run_variant(s, p, None, o).map(|r| (r.joints, r.free_motion))
+        };
+        let Assembly {
+            scenario,
+            trajectory,
+            mut plant,
+            mut sensors,
+            mut closed_loop,
+            ..
+        } = assemble(&source, path, Some("momentum"), &options, &simulate).unwrap();
+        let model = plant.model().clone();
+        let mut external = ExternalVariant::new(
+            "momentum",
+            &model,
+            &scenario.loop_config(),
+            scenario.duration,
+            scenario.evaluation_start,
+            scenario.output.decimation,
+        )
+        .unwrap();
+        let n = model.nq();
+        let (mut q_d, mut qdot_d, mut qddot_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let dt = closed_loop.dt();
+        for k in 0..(scenario.duration / dt).round() as usize {
+            let t = k as f64 * dt;
+            trajectory.eval(t, &mut q_d, &mut qdot_d, &mut qddot_d);
+            let m = sensors
+                .sample(t, plant.q(), closed_loop.torque())
+                .unwrap();
+            let status = closed_loop.step(&LoopInput {
+                time: t,
+                q_d: &q_d,
+                qdot_d: &qdot_d,
+                qddot_d: &qddot_d,
+                measurement: m,
+                true_external_torque: plant.tau_ext(),
+            });
+            plant.step_control(closed_loop.torque()).unwrap();
+            let record = plant.record().clone();
+            let desired = Desired {
+                q_d: &q_d,
+                qdot_d: &qdot_d,
+                qddot_d: &qddot_d,
+            };
+            let step = PlantStep {
+                q: plant.q(),
+                qdot: plant.qdot(),
+                tau_ext: &record.tau_ext,
+                applied: &record.applied,
+            };
+            assert!(external
+                .add(t, &desired, m, &closed_loop, &status, &step)
+                .is_none());
+        }
+        let run = external.finish(&closed_loop, None).unwrap();
+        let (a, b) = (&run.metrics, &expected.metrics);
+        assert!(b.external_torque_nrmse.is_some_and(|x| x > 0.0));
+        assert_eq!(a.external_torque_nrmse, b.external_torque_nrmse);
+        assert_eq!(a.external_torque_rmse, b.external_torque_rmse);
+        assert_eq!(a.false_torque_rms, b.false_torque_rms);
+        assert_eq!(a.admittance_error_rms, b.admittance_error_rms);
+        assert_eq!(a.tracking_rmse, b.tracking_rmse);
+        assert_eq!(a.torque_rms, b.torque_rms);
+        assert_eq!(a.ee_error_rms, b.ee_error_rms);
+        assert_eq!(a.reference_bound_violations, b.reference_bound_violations);
+        assert_eq!(a.q_limit_violation_fraction, b.q_limit_violation_fraction);
+        assert_eq!(run.series.columns, expected.series.columns);
+        assert_eq!(run.series.rows, expected.series.rows);
+    }
 }
