@@ -8,7 +8,9 @@
 //! * [`summary`]: the format marker and version of `summary.json`, and [`summary::is_run_folder`],
 //!   which tells a folder this tool wrote from anything else (a user's folder is never
 //!   replaced by `run --out`);
-//! * [`write_atomic`]: files are written through a temporary sibling and a rename.
+//! * [`write_atomic`]: files are written through a temporary sibling and a rename;
+//!   [`writer`]: a whole run folder through a hidden partial sibling and a rename, and its
+//!   CSV time series.
 //!
 //! docs/outputs.md describes the same contract for users.
 
@@ -18,6 +20,7 @@ pub mod columns;
 pub mod files;
 pub mod metrics;
 pub mod summary;
+pub mod writer;
 
 mod atomic;
 

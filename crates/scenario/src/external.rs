@@ -295,9 +295,7 @@ mod tests {
         for k in 0..(scenario.duration / dt).round() as usize {
             let t = k as f64 * dt;
             trajectory.eval(t, &mut q_d, &mut qdot_d, &mut qddot_d);
-            let m = sensors
-                .sample(t, plant.q(), closed_loop.torque())
-                .unwrap();
+            let m = sensors.sample(t, plant.q(), closed_loop.torque()).unwrap();
             let status = closed_loop.step(&LoopInput {
                 time: t,
                 q_d: &q_d,

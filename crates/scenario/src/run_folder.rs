@@ -4,11 +4,10 @@
 //! looks complete. `--out` may replace only a folder this tool wrote (or an empty one);
 //! anything else is refused before the run starts, unless forced.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use admittance_runfolder::files;
 use admittance_runfolder::summary::{self, OutTarget};
+use admittance_runfolder::{files, writer};
 use serde_json::{json, Value};
 
 use crate::error::ScenarioError;
@@ -17,9 +16,6 @@ use crate::runner::{run_variant, VariantRun};
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
 use crate::spec::Scenario;
-
-/// The file inside a partial folder that marks it as this tool's work in progress.
-const PARTIAL_MARKER: &str = ".admittance-partial";
 
 /// What a finished run produced.
 #[derive(Debug)]
@@ -73,24 +69,9 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
 }
 
 /// Writes any time series as CSV (header row, then one row per sample; shortest
-/// round-trip decimal form of every value).
+/// round-trip decimal form of every value): `admittance_runfolder::writer`'s.
 pub fn write_series_csv(path: &Path, series: &TimeSeries) -> Result<(), RunError> {
-    let file = std::fs::File::create(path).map_err(io_err(path))?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{}", series.columns.join(",")).map_err(io_err(path))?;
-    let mut line = String::new();
-    for row in &series.rows {
-        line.clear();
-        for (k, v) in row.iter().enumerate() {
-            if k > 0 {
-                line.push(',');
-            }
-            use std::fmt::Write as _;
-            let _ = write!(line, "{v}");
-        }
-        writeln!(w, "{line}").map_err(io_err(path))?;
-    }
-    w.flush().map_err(io_err(path))
+    writer::write_series_csv(path, &series.columns, &series.rows).map_err(io_err(path))
 }
 
 /// Where a run may write `out_dir`: refused (before any work) when it holds anything this
@@ -134,40 +115,7 @@ pub fn check_out_dir(out_dir: &Path, scenario: &Path, force: bool) -> Result<(),
 /// killed: only those holding this tool's marker whose process no longer exists.
 /// Returns the folders removed.
 pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
-    let mut removed = Vec::new();
-    let Ok(entries) = std::fs::read_dir(parent) else {
-        return removed;
-    };
-    for e in entries.flatten() {
-        let name = e.file_name().to_string_lossy().to_string();
-        let Some(pid) = name
-            .strip_prefix('.')
-            .and_then(|n| n.rsplit_once(".partial-"))
-            .and_then(|(_, pid)| pid.parse::<u32>().ok())
-        else {
-            continue;
-        };
-        let path = e.path();
-        let ours = path.join(PARTIAL_MARKER).is_file();
-        if ours
-            && pid != std::process::id()
-            && !process_alive(pid)
-            && std::fs::remove_dir_all(&path).is_ok()
-        {
-            removed.push(path);
-        }
-    }
-    removed
-}
-
-/// Whether a process exists (Linux: `/proc/PID`; elsewhere assumed alive, so nothing is
-/// removed that might still be written).
-fn process_alive(pid: u32) -> bool {
-    let proc = Path::new("/proc");
-    if !proc.join("self").exists() {
-        return true;
-    }
-    proc.join(pid.to_string()).exists()
+    writer::remove_stale_partials(parent)
 }
 
 /// Runs every variant of the scenario at `path` (or only `only`) with the `--set`
@@ -408,7 +356,7 @@ fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
 }
 
 /// Writes a folder through a hidden partial sibling (`fill` writes into it) and renames it
-/// to `out_dir` (replacing what [`check_out_dir`] allowed).
+/// to `out_dir` (replacing what [`check_out_dir`] allowed): `admittance_runfolder::writer`.
 fn write_folder(
     out_dir: &Path,
     scenario: &Path,
@@ -417,43 +365,5 @@ fn write_folder(
 ) -> Result<(), RunError> {
     // Checked again: the run may have taken hours.
     check_out_dir(out_dir, scenario, force)?;
-    let parent = out_dir
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io_err(parent))?;
-    remove_stale_partials(parent);
-    let leaf = out_dir
-        .file_name()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "run".into());
-    let partial = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
-    if partial.join(PARTIAL_MARKER).is_file() {
-        let _ = std::fs::remove_dir_all(&partial);
-    }
-    std::fs::create_dir(&partial).map_err(io_err(&partial))?;
-    let marker = partial.join(PARTIAL_MARKER);
-    let result = std::fs::write(&marker, "admittance run in progress\n")
-        .map_err(io_err(&marker))
-        .and_then(|_| fill(&partial));
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&partial);
-        return Err(e);
-    }
-    let _ = std::fs::remove_file(&marker);
-    let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
-    let replaced = std::fs::symlink_metadata(out_dir).is_ok();
-    if replaced {
-        std::fs::rename(out_dir, &old).map_err(io_err(out_dir))?;
-    }
-    if let Err(e) = std::fs::rename(&partial, out_dir) {
-        if replaced {
-            let _ = std::fs::rename(&old, out_dir);
-        }
-        return Err(io_err(out_dir)(e));
-    }
-    if replaced {
-        let _ = std::fs::remove_dir_all(&old);
-    }
-    Ok(())
+    writer::write_folder(out_dir, fill, |path, e| io_err(path)(e))
 }
