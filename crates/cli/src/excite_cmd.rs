@@ -220,5 +220,13 @@ fn report(
         );
     }
     text += &format!("tau: the torque the nominal arm needs (RNEA of the URDF), a feed-forward reference\nwrote {}\n", out.display());
+    if settings.duration > settings.period * (1.0 + 1e-9) {
+        // Blocked cross-validation over a periodic recording holds out periods the fit has
+        // seen: the validation must be another motion.
+        text += &format!(
+            "the motion repeats every {} s: record a second excitation (another --seed) and give it to identify and train as --validation\n",
+            settings.period
+        );
+    }
     text
 }

@@ -37,24 +37,24 @@ fn zero() -> JointValues {
 }
 
 impl SaturationConfig {
-    /// The interval `[lower_i, upper_i]` per joint: `c = (lo + hi) / 2`, `C = (hi - lo) / 2`.
+    /// The interval `[lower_i, upper_i]` per joint: `c = (lo + hi) / 2`, `C = (hi - lo) / 2`;
+    /// a joint without two finite limits is not saturated (`c = 0`, `C = +inf`).
     pub fn from_limits(rho: f64, lower: &[f64], upper: &[f64]) -> Self {
+        let (centre, half_range) = lower
+            .iter()
+            .zip(upper)
+            .map(|(&l, &u)| {
+                if l.is_finite() && u.is_finite() {
+                    (0.5 * (l + u), 0.5 * (u - l))
+                } else {
+                    (0.0, f64::INFINITY)
+                }
+            })
+            .unzip();
         SaturationConfig {
             rho,
-            centre: JointValues::PerJoint(
-                lower
-                    .iter()
-                    .zip(upper)
-                    .map(|(l, u)| 0.5 * (l + u))
-                    .collect(),
-            ),
-            half_range: JointValues::PerJoint(
-                lower
-                    .iter()
-                    .zip(upper)
-                    .map(|(l, u)| 0.5 * (u - l))
-                    .collect(),
-            ),
+            centre: JointValues::PerJoint(centre),
+            half_range: JointValues::PerJoint(half_range),
         }
     }
 }

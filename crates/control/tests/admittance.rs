@@ -426,3 +426,16 @@ fn faults_freeze_the_state_and_hold_the_reference() {
         .is_ok());
     assert!(adm.deviation()[0] > dev, "resumes");
 }
+
+/// A joint without two finite limits (continuous, or one-sided) is not saturated: centre 0,
+/// half range infinite, never a NaN centre (the Python `Admittance(bound=None)` uses this).
+#[test]
+fn joints_without_finite_limits_are_not_saturated() {
+    let inf = f64::INFINITY;
+    let sat = SaturationConfig::from_limits(0.95, &[-1.0, -inf, -inf], &[1.0, 2.0, inf]);
+    let s = Saturation::new(3, &sat).unwrap();
+    assert_eq!(s.centre(), &[0.0, 0.0, 0.0]);
+    assert_eq!(s.half_range(), &[1.0, inf, inf]);
+    assert_eq!(s.apply(1, 50.0).0, 50.0);
+    assert_eq!(s.apply(2, -50.0).0, -50.0);
+}

@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::config;
-use crate::control::FaultRecord;
+use crate::control::{stepped_pymethods, FaultRecord};
 use crate::convert::{config_error, read_vector, value_error, vector_out};
 use crate::model::PyModel;
 
@@ -36,25 +36,6 @@ pub struct PyAdmittance {
     /// `q_d, qdot_d, qddot_d, tau_ext_hat`, `n` each.
     input: Vec<f64>,
     faults: FaultRecord,
-}
-
-fn saturation_from_limits(m: &PyModel, rho: f64) -> SaturationConfig {
-    let (mut centre, mut half) = (Vec::new(), Vec::new());
-    for j in &m.model.joints {
-        let (lo, hi) = (j.limits.lower, j.limits.upper);
-        if lo.is_finite() && hi.is_finite() {
-            centre.push(0.5 * (lo + hi));
-            half.push(0.5 * (hi - lo));
-        } else {
-            centre.push(0.0);
-            half.push(f64::INFINITY);
-        }
-    }
-    SaturationConfig {
-        rho,
-        centre: JointValues::PerJoint(centre),
-        half_range: JointValues::PerJoint(half),
-    }
 }
 
 /// A configuration key as the keyword constructor calls it.
@@ -89,8 +70,7 @@ impl PyAdmittance {
     }
 }
 
-#[pymethods]
-impl PyAdmittance {
+stepped_pymethods!(PyAdmittance {
     #[new]
     #[pyo3(signature = (m, damping, stiffness, mass=None, rho=Some(0.95), bound=None))]
     fn new(
@@ -118,7 +98,10 @@ impl PyAdmittance {
                     centre: JointValues::Uniform(0.0),
                     half_range: config::joint_values(b, "bound", n)?,
                 }),
-                (Some(rho), _) => Some(saturation_from_limits(pm, rho)),
+                (Some(rho), _) => {
+                    let (lower, upper) = pm.model.position_limits().unzip::<f64, f64, Vec<f64>, Vec<f64>>();
+                    Some(SaturationConfig::from_limits(rho, &lower, &upper))
+                }
             };
         let cfg = AdmittanceConfig {
             damping: config::joint_values(damping, "damping", n)?,
@@ -215,22 +198,4 @@ impl PyAdmittance {
     fn deviation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, self.inner.deviation())
     }
-
-    /// Number of joints.
-    #[getter]
-    fn n(&self) -> usize {
-        self.n
-    }
-
-    /// What the last `step` faulted on (the reference was held), or `None`.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        self.faults.message()
-    }
-
-    /// Steps that faulted since construction or `reset`.
-    #[getter]
-    fn fault_count(&self) -> u64 {
-        self.faults.count
-    }
-}
+});

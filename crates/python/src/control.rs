@@ -58,6 +58,80 @@ impl AnyController {
 
 const JOINTS: &str = "one value per joint, in chain order";
 
+/// A `#[pymethods]` block of a class stepped every control period that has `n` (joints) and
+/// `faults` (a [`FaultRecord`]): the class's own `methods` and, defined once for the
+/// controllers, the observers and the admittance model, the getters `n`, `fault` and
+/// `fault_count`.
+macro_rules! stepped_pymethods {
+    ($ty:ty { $($methods:tt)* }) => {
+        #[pymethods]
+        impl $ty {
+            $($methods)*
+
+            /// Number of joints.
+            #[getter]
+            fn n(&self) -> usize {
+                self.n
+            }
+
+            /// What the last step faulted on (the safe fallback was returned instead), or
+            /// `None` after a valid step.
+            #[getter]
+            fn fault(&self) -> Option<String> {
+                self.faults.message()
+            }
+
+            /// Steps that faulted since construction or `reset`.
+            #[getter]
+            fn fault_count(&self) -> u64 {
+                self.faults.count
+            }
+        }
+    };
+}
+pub(crate) use stepped_pymethods;
+
+/// Reads the arguments of a controller step into `b` (`n` each, in this order).
+#[allow(clippy::too_many_arguments)]
+fn read_control_input(
+    b: &mut [f64],
+    n: usize,
+    q: &Bound<'_, PyAny>,
+    qdot: &Bound<'_, PyAny>,
+    q_ref: &Bound<'_, PyAny>,
+    qdot_ref: &Bound<'_, PyAny>,
+    qddot_ref: &Bound<'_, PyAny>,
+    tau_ext_hat: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    for (k, (obj, name)) in [
+        (q, "q"),
+        (qdot, "qdot"),
+        (q_ref, "q_ref"),
+        (qdot_ref, "qdot_ref"),
+        (qddot_ref, "qddot_ref"),
+        (tau_ext_hat, "tau_ext_hat"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        read_vector(obj, name, &mut b[k * n..(k + 1) * n], JOINTS)?;
+    }
+    Ok(())
+}
+
+/// The controller input of the values read by [`read_control_input`].
+fn control_input(b: &[f64], n: usize, time: f64) -> ControlInput<'_> {
+    ControlInput {
+        time,
+        q: &b[..n],
+        qdot: &b[n..2 * n],
+        q_ref: &b[2 * n..3 * n],
+        qdot_ref: &b[3 * n..4 * n],
+        qddot_ref: &b[4 * n..5 * n],
+        external_torque_estimate: &b[5 * n..],
+    }
+}
+
 /// A joint-torque controller: the common interface of `NeuralController`, `PdController`
 /// and `ComputedTorqueController` (not constructed directly).
 ///
@@ -88,8 +162,7 @@ impl PyController {
     }
 }
 
-#[pymethods]
-impl PyController {
+stepped_pymethods!(PyController {
     /// One control step of length `dt` (s): the commanded joint torque `(n,)`, finite and
     /// within the effort limits. `q`, `qdot`: measured state; `q_ref`, `qdot_ref`,
     /// `qddot_ref`: the (compliant) reference; `tau_ext_hat`: the external-torque estimate
@@ -111,22 +184,10 @@ impl PyController {
         out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let n = self.n;
-        let b = &mut self.input;
-        read_vector(q, "q", &mut b[..n], JOINTS)?;
-        read_vector(qdot, "qdot", &mut b[n..2 * n], JOINTS)?;
-        read_vector(q_ref, "q_ref", &mut b[2 * n..3 * n], JOINTS)?;
-        read_vector(qdot_ref, "qdot_ref", &mut b[3 * n..4 * n], JOINTS)?;
-        read_vector(qddot_ref, "qddot_ref", &mut b[4 * n..5 * n], JOINTS)?;
-        read_vector(tau_ext_hat, "tau_ext_hat", &mut b[5 * n..], JOINTS)?;
-        let input = ControlInput {
-            time: t,
-            q: &b[..n],
-            qdot: &b[n..2 * n],
-            q_ref: &b[2 * n..3 * n],
-            qdot_ref: &b[3 * n..4 * n],
-            qddot_ref: &b[4 * n..5 * n],
-            external_torque_estimate: &b[5 * n..],
-        };
+        read_control_input(
+            &mut self.input, n, q, qdot, q_ref, qdot_ref, qddot_ref, tau_ext_hat,
+        )?;
+        let input = control_input(&self.input, n, t);
         let status = self.inner.as_dyn().step(&input, dt, &mut self.torque);
         self.faults.record(status);
         vector_out(py, &self.torque, out, "out")
@@ -149,22 +210,10 @@ impl PyController {
         calls: usize,
     ) -> PyResult<f64> {
         let n = self.n;
-        let b = &mut self.input;
-        read_vector(q, "q", &mut b[..n], JOINTS)?;
-        read_vector(qdot, "qdot", &mut b[n..2 * n], JOINTS)?;
-        read_vector(q_ref, "q_ref", &mut b[2 * n..3 * n], JOINTS)?;
-        read_vector(qdot_ref, "qdot_ref", &mut b[3 * n..4 * n], JOINTS)?;
-        read_vector(qddot_ref, "qddot_ref", &mut b[4 * n..5 * n], JOINTS)?;
-        read_vector(tau_ext_hat, "tau_ext_hat", &mut b[5 * n..], JOINTS)?;
-        let input = ControlInput {
-            time: t,
-            q: &b[..n],
-            qdot: &b[n..2 * n],
-            q_ref: &b[2 * n..3 * n],
-            qdot_ref: &b[3 * n..4 * n],
-            qddot_ref: &b[4 * n..5 * n],
-            external_torque_estimate: &b[5 * n..],
-        };
+        read_control_input(
+            &mut self.input, n, q, qdot, q_ref, qdot_ref, qddot_ref, tau_ext_hat,
+        )?;
+        let input = control_input(&self.input, n, t);
         let ctl = self.inner.as_dyn();
         let start = std::time::Instant::now();
         for _ in 0..calls {
@@ -185,25 +234,7 @@ impl PyController {
     fn name(&mut self) -> String {
         self.inner.as_dyn().name().to_string()
     }
-
-    /// Number of joints.
-    #[getter]
-    fn n(&self) -> usize {
-        self.n
-    }
-
-    /// What the last `step` faulted on (and held safely instead), or `None`.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        self.faults.message()
-    }
-
-    /// Steps that faulted since construction or `reset`.
-    #[getter]
-    fn fault_count(&self) -> u64 {
-        self.faults.count
-    }
-}
+});
 
 /// The paper's adaptive RBF neural controller with deadzone compensation (docs/method.md
 /// section 3) on the nominal model `m`.

@@ -7,7 +7,8 @@
 //! * [`control`]: the controllers; [`observers`]: the external-torque observers and the
 //!   observers' input filter; [`admittance`]: the admittance model;
 //! * [`network`]: training, growing, saving and loading the observer's network;
-//! * [`run`]: a scenario run, as `admittance run`;
+//! * [`run`]: a scenario run, as `admittance run`; [`closed_loop`]: the Rust `ClosedLoop`,
+//!   and the metrics and run folder of a loop stepped against a plant outside Rust;
 //! * [`config`]: configuration dicts with the scenario files' keys; [`convert`]: arrays
 //!   and errors.
 
@@ -15,6 +16,7 @@
 
 mod admittance;
 mod bag;
+mod closed_loop;
 mod config;
 mod control;
 mod convert;
@@ -46,6 +48,8 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(identification::load_identification, m)?,
         wrap_pyfunction!(identification::excitation, m)?,
         wrap_pyfunction!(bag::import_bag, m)?,
+        wrap_pyfunction!(closed_loop::write_run_folder, m)?,
+        wrap_pyfunction!(closed_loop::check_out_dir, m)?,
     ] {
         m.add_function(f)?;
     }
@@ -60,6 +64,8 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<observers::PyOracleObserver>()?;
     m.add_class::<observers::PyInputConditioner>()?;
     m.add_class::<admittance::PyAdmittance>()?;
+    m.add_class::<closed_loop::PyClosedLoop>()?;
+    m.add_class::<closed_loop::PyVariantRecorder>()?;
     m.add_class::<network::PyNetwork>()?;
     m.add_class::<identification::PyIdentification>()?;
     m.add("RunFailed", m.py().get_type::<run::RunFailed>())?;

@@ -691,3 +691,18 @@ impl PyNetwork {
         )
     }
 }
+
+impl PyNetwork {
+    /// The training metrics of `summary.json` for a loop observer on this network
+    /// (`train_seconds`, `observer_nodes`, `validation_nrmse`, ...).
+    pub(crate) fn training_metrics(&self) -> admittance_scenario::ObserverTrainingMetrics {
+        admittance_scenario::ObserverTrainingMetrics {
+            train_seconds: self.seconds.unwrap_or(0.0),
+            observer_nodes: self.model.n_nodes(),
+            validation_nrmse: self.validation_nrmse.clone().unwrap_or_default(),
+            observer_model_cached: false,
+            training_samples: self.samples.unwrap_or(0),
+            observer_lambda: self.model.lambda(),
+        }
+    }
+}

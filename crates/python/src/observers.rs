@@ -11,7 +11,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 
 use crate::config;
-use crate::control::FaultRecord;
+use crate::control::{stepped_pymethods, FaultRecord};
 use crate::convert::{config_error, read_vector, require_finite, value_error, vector, vector_out};
 use crate::network::PyNetwork;
 
@@ -34,6 +34,29 @@ impl AnyObserver {
 }
 
 const JOINTS: &str = "one value per joint, in chain order";
+
+/// Reads the arguments of an observer update into `b` (`n` each, in this order) and returns
+/// the observer input of them.
+fn observer_input<'b>(
+    b: &'b mut [f64],
+    n: usize,
+    time: f64,
+    [q, qdot, qddot, tau]: [&Bound<'_, PyAny>; 4],
+) -> PyResult<ObserverInput<'b>> {
+    for (k, (obj, name)) in [(q, "q"), (qdot, "qdot"), (qddot, "qddot"), (tau, "tau")]
+        .into_iter()
+        .enumerate()
+    {
+        read_vector(obj, name, &mut b[k * n..(k + 1) * n], JOINTS)?;
+    }
+    Ok(ObserverInput {
+        time,
+        q: &b[..n],
+        qdot: &b[n..2 * n],
+        qddot: &b[2 * n..3 * n],
+        tau_commanded: &b[3 * n..],
+    })
+}
 
 /// An external-torque observer: the common interface of `MomentumObserver`,
 /// `LearnedObserver`, `HybridObserver` and `OracleObserver` (not constructed directly).
@@ -64,8 +87,7 @@ impl PyObserver {
     }
 }
 
-#[pymethods]
-impl PyObserver {
+stepped_pymethods!(PyObserver {
     /// One update with the sample at time `t` (s) of a period `dt` (s): the estimate of the
     /// external joint torque `(n,)`. `q`, `qdot`, `qddot`: measured angles, velocities and
     /// (filtered) accelerations; `tau`: the torque commanded (for a learned network, the
@@ -84,19 +106,7 @@ impl PyObserver {
         dt: f64,
         out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let n = self.n;
-        let b = &mut self.input;
-        read_vector(q, "q", &mut b[..n], JOINTS)?;
-        read_vector(qdot, "qdot", &mut b[n..2 * n], JOINTS)?;
-        read_vector(qddot, "qddot", &mut b[2 * n..3 * n], JOINTS)?;
-        read_vector(tau, "tau", &mut b[3 * n..], JOINTS)?;
-        let input = ObserverInput {
-            time: t,
-            q: &b[..n],
-            qdot: &b[n..2 * n],
-            qddot: &b[2 * n..3 * n],
-            tau_commanded: &b[3 * n..],
-        };
+        let input = observer_input(&mut self.input, self.n, t, [q, qdot, qddot, tau])?;
         let status = self.inner.as_dyn().update(&input, dt, &mut self.estimate);
         self.faults.record(status);
         vector_out(py, &self.estimate, out, "out")
@@ -116,19 +126,7 @@ impl PyObserver {
         dt: f64,
         calls: usize,
     ) -> PyResult<f64> {
-        let n = self.n;
-        let b = &mut self.input;
-        read_vector(q, "q", &mut b[..n], JOINTS)?;
-        read_vector(qdot, "qdot", &mut b[n..2 * n], JOINTS)?;
-        read_vector(qddot, "qddot", &mut b[2 * n..3 * n], JOINTS)?;
-        read_vector(tau, "tau", &mut b[3 * n..], JOINTS)?;
-        let input = ObserverInput {
-            time: t,
-            q: &b[..n],
-            qdot: &b[n..2 * n],
-            qddot: &b[2 * n..3 * n],
-            tau_commanded: &b[3 * n..],
-        };
+        let input = observer_input(&mut self.input, self.n, t, [q, qdot, qddot, tau])?;
         let obs = self.inner.as_dyn();
         let start = std::time::Instant::now();
         for _ in 0..calls {
@@ -149,25 +147,7 @@ impl PyObserver {
     fn name(&mut self) -> String {
         self.inner.as_dyn().name().to_string()
     }
-
-    /// Number of joints.
-    #[getter]
-    fn n(&self) -> usize {
-        self.n
-    }
-
-    /// What the last `update` faulted on (its estimate was zero), or `None`.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        self.faults.message()
-    }
-
-    /// Updates that faulted since construction or `reset`.
-    #[getter]
-    fn fault_count(&self) -> u64 {
-        self.faults.count
-    }
-}
+});
 
 /// The momentum observer's settings from `gain` (one number or one per joint) or a
 /// `config` dict with the keys of `[observer.momentum]`; not both.

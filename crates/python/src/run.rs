@@ -10,7 +10,7 @@ use pyo3::exceptions::{PyOSError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
-use crate::config::to_toml;
+use crate::config::from_py;
 
 create_exception!(
     admittance,
@@ -36,9 +36,12 @@ fn override_strings(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String
                     )
                 })?
                 .extract()?;
-            let value = to_toml(&v, &key)?.ok_or_else(|| {
-                PyValueError::new_err(format!("overrides: key `{key}`: None is not a value"))
-            })?;
+            if v.is_none() {
+                return Err(PyValueError::new_err(format!(
+                    "overrides: key `{key}`: None is not a value"
+                )));
+            }
+            let value: toml::Value = from_py(&v, &format!("overrides: key `{key}`"))?;
             out.push(format!("{key}={value}"));
         }
         return Ok(out);

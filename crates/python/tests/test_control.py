@@ -171,7 +171,7 @@ def test_config_errors_name_the_key(baxter):
         adm.NeuralController(baxter, [("k1", 1.0)])
     with pytest.raises(TypeError, match="keys must be strings"):
         adm.NeuralController(baxter, {1: 1.0})
-    with pytest.raises(TypeError, match=r"config key `k1`"):
+    with pytest.raises(TypeError, match=r"config: key `k1`: a `object` is not a configuration value"):
         adm.NeuralController(baxter, {"k1": object()})
     # None leaves a key at its default; the safe hold's keys validate too.
     adm.NeuralController(baxter, {"k1": None, "safe_hold": {"damping": 0.3, "effort_limits": 40.0}})

@@ -114,3 +114,27 @@ def test_the_run_folder_is_ordinary_and_the_tip_is_found(tmp_path):
     assert files and all(stat.S_IMODE(f.stat().st_mode) == 0o644 for f in files)
     # No --tip: the run used the CLI's tip (Model.from_urdf's default) instead of stopping.
     assert adm.Model.from_urdf(PANDA).tip_link
+
+
+def test_variant_repeats_and_the_folder_loads_as_a_scenario(tmp_path, admittance_bin):
+    """`--variant` can be repeated (duplicates once); the run folder's scenario.toml is a
+    scenario the loader runs, and `admittance report` draws the folder."""
+    pytest.importorskip("mujoco", reason="mujoco is not installed (pip install './crates/python[mujoco]')")
+    import json
+
+    import admittance as adm
+
+    out = tmp_path / "run"
+    p = run_module(["--urdf", str(PANDA), "--out", str(out), "--duration", "3",
+                    "--variant", "oracle", "--variant", "momentum,oracle"], timeout=300)
+    assert p.returncode == 0, p.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["variant_order"] == ["oracle", "momentum"]
+    assert summary["plant"] == "mujoco" and summary["cosim"]["settings"]["duration"] == 3.0
+    rerun = adm.run(out / "scenario.toml", tmp_path / "rerun", variant="momentum",
+                    overrides={"duration": 0.2, "evaluation_start": 0.1}, report=False)
+    assert rerun["variants"]["momentum"]["steps"] == 200
+    r = subprocess.run([str(admittance_bin), "report", str(out)], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert (out / "report.md").is_file()

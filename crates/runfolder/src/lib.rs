@@ -10,7 +10,9 @@
 //!   replaced by `run --out`);
 //! * [`settings`]: `settings.json`, every variant's settings as the run applied them (the
 //!   deadzone, environment windows, evaluation window, saturation bounds, kinds);
-//! * [`write_atomic`]: files are written through a temporary sibling and a rename.
+//! * [`write_atomic`]: files are written through a temporary sibling and a rename;
+//!   [`writer`]: a whole run folder through a hidden partial sibling and a rename, and its
+//!   CSV time series.
 //!
 //! docs/outputs.md describes the same contract for users.
 
@@ -21,6 +23,7 @@ pub mod files;
 pub mod metrics;
 pub mod settings;
 pub mod summary;
+pub mod writer;
 
 mod atomic;
 

@@ -33,6 +33,7 @@ mod assemble;
 mod budget;
 mod context;
 mod error;
+mod external;
 mod free_motion;
 mod gather;
 mod hand;
@@ -54,6 +55,7 @@ mod training;
 mod trajectory;
 
 pub use error::{Invalid, ScenarioError};
+pub use external::{Desired, ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use health::Divergence;
 pub use limits::Limits;
@@ -61,8 +63,8 @@ pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, Vari
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
 pub use robot::{robot_loop, RobotLoop};
 pub use run_folder::{
-    check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants, write_series_csv,
-    RunError, RunSummary,
+    check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants,
+    write_external_run_folder, write_series_csv, RunError, RunSummary,
 };
 pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};

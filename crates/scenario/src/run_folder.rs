@@ -4,12 +4,11 @@
 //! looks complete. `--out` may replace only a folder this tool wrote (or an empty one);
 //! anything else is refused before the run starts, unless forced.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use admittance_runfolder::files;
 use admittance_runfolder::settings::RunSettings;
 use admittance_runfolder::summary::{self, OutTarget};
+use admittance_runfolder::{files, writer};
 use serde_json::{json, Value};
 
 use crate::error::ScenarioError;
@@ -18,9 +17,6 @@ use crate::runner::{run_variant, VariantRun};
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
 use crate::spec::Scenario;
-
-/// The file inside a partial folder that marks it as this tool's work in progress.
-const PARTIAL_MARKER: &str = ".admittance-partial";
 
 /// What a finished run produced.
 #[derive(Debug)]
@@ -74,24 +70,9 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
 }
 
 /// Writes any time series as CSV (header row, then one row per sample; shortest
-/// round-trip decimal form of every value).
+/// round-trip decimal form of every value): `admittance_runfolder::writer`'s.
 pub fn write_series_csv(path: &Path, series: &TimeSeries) -> Result<(), RunError> {
-    let file = std::fs::File::create(path).map_err(io_err(path))?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{}", series.columns.join(",")).map_err(io_err(path))?;
-    let mut line = String::new();
-    for row in &series.rows {
-        line.clear();
-        for (k, v) in row.iter().enumerate() {
-            if k > 0 {
-                line.push(',');
-            }
-            use std::fmt::Write as _;
-            let _ = write!(line, "{v}");
-        }
-        writeln!(w, "{line}").map_err(io_err(path))?;
-    }
-    w.flush().map_err(io_err(path))
+    writer::write_series_csv(path, &series.columns, &series.rows).map_err(io_err(path))
 }
 
 /// Where a run may write `out_dir`: refused (before any work) when it holds anything this
@@ -135,40 +116,7 @@ pub fn check_out_dir(out_dir: &Path, scenario: &Path, force: bool) -> Result<(),
 /// killed: only those holding this tool's marker whose process no longer exists.
 /// Returns the folders removed.
 pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
-    let mut removed = Vec::new();
-    let Ok(entries) = std::fs::read_dir(parent) else {
-        return removed;
-    };
-    for e in entries.flatten() {
-        let name = e.file_name().to_string_lossy().to_string();
-        let Some(pid) = name
-            .strip_prefix('.')
-            .and_then(|n| n.rsplit_once(".partial-"))
-            .and_then(|(_, pid)| pid.parse::<u32>().ok())
-        else {
-            continue;
-        };
-        let path = e.path();
-        let ours = path.join(PARTIAL_MARKER).is_file();
-        if ours
-            && pid != std::process::id()
-            && !process_alive(pid)
-            && std::fs::remove_dir_all(&path).is_ok()
-        {
-            removed.push(path);
-        }
-    }
-    removed
-}
-
-/// Whether a process exists (Linux: `/proc/PID`; elsewhere assumed alive, so nothing is
-/// removed that might still be written).
-fn process_alive(pid: u32) -> bool {
-    let proc = Path::new("/proc");
-    if !proc.join("self").exists() {
-        return true;
-    }
-    proc.join(pid.to_string()).exists()
+    writer::remove_stale_partials(parent)
 }
 
 /// Runs every variant of the scenario at `path` (or only `only`) with the `--set`
@@ -281,6 +229,59 @@ pub fn run_scenario_variants(
     })
 }
 
+/// Writes the run folder of variants run on a plant outside this crate
+/// ([`crate::ExternalVariant`], the MuJoCo co-simulation): the same files as
+/// [`run_scenario_variants`] (one CSV per variant, `summary.json`, `scenario.toml`), written
+/// the same way (a hidden partial sibling renamed into place; `out_dir` may replace only a
+/// folder this tool wrote, or an empty one, unless `force`). `scenario_text` is the scenario
+/// as run; it must load as a scenario (every variant resolved and validated as a scenario
+/// file's, so that the scenario loader and `admittance report` accept the folder).
+/// `extra` holds the summary's keys beyond the metrics (`plant`, ...). `protect` is a file
+/// the folder must not contain (the arm's URDF). Returns the summary and the failures (a
+/// divergence, a metric not finite), as [`RunSummary`] has them.
+pub fn write_external_run_folder(
+    out_dir: &Path,
+    scenario_text: &str,
+    runs: &[VariantRun],
+    extra: serde_json::Map<String, Value>,
+    force: bool,
+    protect: &Path,
+) -> Result<(Value, Vec<String>), RunError> {
+    check_out_dir(out_dir, protect, force)?;
+    let source = ScenarioSource::parse(scenario_text, files::SCENARIO)?;
+    let mut scenario_name = String::new();
+    let names = source.variant_names();
+    for run in runs {
+        if !names.contains(&run.name) {
+            return Err(RunError::Finish(format!(
+                "{}: has no [variants.{}] for the variant run",
+                files::SCENARIO,
+                run.name
+            )));
+        }
+        let s: Scenario = source.resolve(Some(&run.name))?;
+        scenario_name = s.name;
+    }
+    let mut summary = summary_json(&scenario_name, runs);
+    if let Value::Object(map) = &mut summary {
+        for (k, v) in extra {
+            map.entry(k).or_insert(v);
+        }
+    }
+    write_folder(out_dir, protect, force, |partial| {
+        for run in runs {
+            write_series_csv(&partial.join(files::series(&run.name)), &run.series)?;
+        }
+        let scenario_copy = partial.join(files::SCENARIO);
+        std::fs::write(&scenario_copy, scenario_text).map_err(io_err(&scenario_copy))?;
+        let summary_path = partial.join(files::SUMMARY);
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        std::fs::write(&summary_path, text).map_err(io_err(&summary_path))
+    })?;
+    let failures = runs.iter().flat_map(failures).collect();
+    Ok((summary, failures))
+}
+
 /// What went wrong in a variant: a divergence, or a metric that is not finite (the JSON
 /// `null` of a NaN; `external_torque_nrmse` is `null` by design without contact).
 fn failures(run: &VariantRun) -> Vec<String> {
@@ -362,7 +363,7 @@ fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
 }
 
 /// Writes a folder through a hidden partial sibling (`fill` writes into it) and renames it
-/// to `out_dir` (replacing what [`check_out_dir`] allowed).
+/// to `out_dir` (replacing what [`check_out_dir`] allowed): `admittance_runfolder::writer`.
 fn write_folder(
     out_dir: &Path,
     scenario: &Path,
@@ -371,46 +372,5 @@ fn write_folder(
 ) -> Result<(), RunError> {
     // Checked again: the run may have taken hours.
     check_out_dir(out_dir, scenario, force)?;
-    let parent = out_dir
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io_err(parent))?;
-    remove_stale_partials(parent);
-    let leaf = out_dir
-        .file_name()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "run".into());
-    let partial = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
-    if partial.join(PARTIAL_MARKER).is_file() {
-        let _ = std::fs::remove_dir_all(&partial);
-    }
-    std::fs::create_dir(&partial).map_err(io_err(&partial))?;
-    let marker = partial.join(PARTIAL_MARKER);
-    let result = std::fs::write(&marker, "admittance run in progress\n")
-        .map_err(io_err(&marker))
-        .and_then(|_| fill(&partial));
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&partial);
-        return Err(e);
-    }
-    // From here to the end the partial folder may be the only complete copy: an interrupt's
-    // clean-up waits (admittance_runfolder::commit_guard).
-    let _commit = admittance_runfolder::commit_guard();
-    let _ = std::fs::remove_file(&marker);
-    let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
-    let replaced = std::fs::symlink_metadata(out_dir).is_ok();
-    if replaced {
-        std::fs::rename(out_dir, &old).map_err(io_err(out_dir))?;
-    }
-    if let Err(e) = std::fs::rename(&partial, out_dir) {
-        if replaced {
-            let _ = std::fs::rename(&old, out_dir);
-        }
-        return Err(io_err(out_dir)(e));
-    }
-    if replaced {
-        let _ = std::fs::remove_dir_all(&old);
-    }
-    Ok(())
+    writer::write_folder(out_dir, fill, |path, e| io_err(path)(e))
 }

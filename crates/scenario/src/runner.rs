@@ -219,7 +219,7 @@ fn simulate_variant(
     options.report(variant_name, Stage::Simulate, steps as u64, steps as u64);
     let mut run = finish(
         variant_name,
-        closed_loop,
+        &closed_loop,
         gather,
         recorder,
         events,
@@ -236,9 +236,9 @@ fn simulate_variant(
 
 /// Everything gathered, as a [`VariantRun`].
 #[allow(clippy::too_many_arguments)]
-fn finish(
+pub(crate) fn finish(
     name: &str,
-    closed_loop: ClosedLoop,
+    closed_loop: &ClosedLoop,
     gather: Gather,
     recorder: Recorder,
     events: Option<NodeEvents>,
@@ -261,7 +261,7 @@ fn finish(
         );
     }
     let mut node_weights = None;
-    if let Some((dynamic, weights)) = events.and_then(|ev| ev.finish(&closed_loop)) {
+    if let Some((dynamic, weights)) = events.and_then(|ev| ev.finish(closed_loop)) {
         metrics.dynamic_nodes = Some(dynamic);
         node_weights = Some(weights);
     }

@@ -311,6 +311,139 @@ class Admittance:
     def fault_count(self) -> int:
         """Steps that faulted since construction or ``reset``."""
 
+class ClosedLoop:
+    """One control period of the Rust loop (``admittance_loop::ClosedLoop``): the encoder
+    angles through the sensors' low-pass and differentiation (``sensor_cutoff_hz``, 0: none),
+    the observer stage (input conditioning, estimate low-pass, warm-up), the admittance model
+    and the controller, exactly as a scenario's variant runs them.
+
+    ``config``: a dict with the keys of a scenario's loop tables (``control_rate_hz``,
+    ``controller``, ``admittance`` or ``task_admittance``, ``observer``); ``network``: the
+    trained network of a ``learned`` or ``hybrid`` observer. A bad key or value is a
+    ``ValueError`` naming its dotted key. ``step`` never raises on bad numbers.
+    """
+
+    def __init__(
+        self,
+        m: Model,
+        config: Config,
+        network: Optional["Network"] = None,
+        *,
+        sensor_cutoff_hz: float = 0.0,
+    ) -> None: ...
+    def step(
+        self,
+        t: float,
+        q: ArrayLike,
+        tau: Optional[ArrayLike],
+        q_d: ArrayLike,
+        qdot_d: ArrayLike,
+        qddot_d: ArrayLike,
+        tau_ext: Optional[ArrayLike] = None,
+        *,
+        out: Optional[Tuple[Vector, Vector]] = None,
+    ) -> Tuple[Vector, Vector]:
+        """One period at ``t``: ``q`` the encoder angles, ``tau`` the torque applied over the
+        period that ended (``None``: the loop's last command), the desired trajectory, and
+        ``tau_ext`` the true external torque (read by an ``oracle`` observer only). Returns
+        ``(torque, estimate)``: the command and the external-torque estimate."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+    @property
+    def dt(self) -> float:
+        """The control period (s)."""
+    @property
+    def torque(self) -> Vector:
+        """The command of the last step."""
+    @property
+    def estimate(self) -> Vector:
+        """The external-torque estimate of the last step."""
+    @property
+    def q_r(self) -> Vector:
+        """The compliant reference of the last step."""
+    @property
+    def qdot_r(self) -> Vector:
+        """``q_r'`` of the last step."""
+    @property
+    def qddot_r(self) -> Vector:
+        """``q_r''`` of the last step."""
+    @property
+    def measurement(self) -> Dict[str, Vector]:
+        """The last measurement: ``q``, ``q_filtered``, ``qdot``, ``qddot``, ``tau_filtered``."""
+    @property
+    def fault(self) -> Optional[str]:
+        """What the controller's last step faulted on (it held safely), or ``None``."""
+    @property
+    def fault_count(self) -> int:
+        """Controller steps that faulted."""
+    @property
+    def observer_fault_count(self) -> int:
+        """Observer updates that faulted."""
+
+class VariantRecorder:
+    """The metrics, health checks (divergence) and time series of one variant whose plant runs
+    outside Rust (the MuJoCo co-simulation), gathered by the scenario runner's code: ``add``
+    after each ``ClosedLoop.step`` and plant step, ``finish`` at the end, then
+    ``write_run_folder``. Metrics over ``[evaluation_start, duration]``; a row of
+    ``VARIANT.csv`` every ``decimation`` steps."""
+
+    def __init__(
+        self,
+        name: str,
+        m: Model,
+        config: Config,
+        duration: float,
+        evaluation_start: float,
+        decimation: int = 10,
+    ) -> None: ...
+    def add(
+        self,
+        closed_loop: ClosedLoop,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        tau_ext: ArrayLike,
+        applied: Optional[ArrayLike] = None,
+    ) -> Optional[str]:
+        """Gathers the loop's last step and the plant's state after it (true ``q``, ``qdot``,
+        external torque, applied torque; ``None``: the command). Returns why the variant
+        diverged (stop then), or ``None``."""
+    def finish(self, closed_loop: ClosedLoop, network: Optional["Network"] = None) -> None:
+        """Ends the variant; ``network``: its observer's, for the training metrics."""
+    @property
+    def name(self) -> str:
+        """The variant's name."""
+    @property
+    def steps(self) -> int:
+        """Control steps gathered."""
+    @property
+    def divergence(self) -> Optional[Tuple[float, str]]:
+        """``(time, reason)`` of a divergence, or ``None``."""
+    @property
+    def metrics(self) -> Optional[dict]:
+        """The variant's ``summary.json`` metrics after ``finish``."""
+
+def write_run_folder(
+    out: StrPath,
+    scenario: Config,
+    recorders: List[VariantRecorder],
+    extra: Optional[Config] = None,
+    *,
+    force: bool = False,
+    protect: Optional[StrPath] = None,
+    header: Optional[str] = None,
+) -> Tuple[dict, List[str]]:
+    """Writes the run folder of finished recorders as ``admittance run`` does (atomic; a
+    ``VARIANT.csv`` each, ``summary.json`` with the keys of ``extra``, ``scenario.toml`` from
+    the dict ``scenario``, which must load as a scenario with a ``[variants.NAME]`` per
+    recorder; ``header`` as its first comment lines). Returns ``(summary, failures)``. Raises
+    ``FileExistsError`` when ``out`` may not be replaced (without ``force``)."""
+
+def check_out_dir(out: StrPath, *, force: bool = False, protect: Optional[StrPath] = None) -> None:
+    """``admittance run``'s rule for ``--out``: raises ``FileExistsError`` unless ``out`` is
+    new, empty or a run folder this tool wrote (or ``force``), and it holds neither the
+    current folder nor ``protect``."""
+
 class Network:
     """A trained flat RBF network of the learned or hybrid observer (inputs ``[q, qdot,
     qddot]``, one output per joint)."""

@@ -81,7 +81,9 @@ pub struct StepRecord {
 }
 
 impl StepRecord {
-    fn new(n: usize) -> Self {
+    /// A record of `n` joints, every value zero (a plant outside this crate fills the
+    /// fields it has: the co-simulation of the Python package).
+    pub fn new(n: usize) -> Self {
         Self {
             time: 0.0,
             command: vec![0.0; n],

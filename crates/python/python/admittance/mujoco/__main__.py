@@ -44,14 +44,19 @@ def _main(argv):
     p.add_argument("--width-scale", type=float, default=2.0, help="Gaussian widths: this times the mean distance to the nearest centres (2, as admittance train)")
     p.add_argument("--push-force", type=float, default=10.0, help="peak of the scripted push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0, help="scales the unknown joint friction, damping and armature (1)")
-    p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
+    p.add_argument("--variant", "--variants", dest="variant", action="append", metavar="NAME",
+                   help="a variant to run, repeated for more (or comma-separated), of " + ", ".join(VARIANTS)
+                   + " (default: all, in this order)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--force", action="store_true", help="replace an --out folder this tool did not write")
     a = p.parse_args(argv)
-    variants = [v for v in a.variants.split(",") if v]
+    variants = []
+    for v in (name for arg in (a.variant or VARIANTS) for name in arg.split(",") if name):
+        if v not in variants:
+            variants.append(v)
     unknown = [v for v in variants if v not in VARIANTS]
     if unknown:
-        p.error(f"--variants: unknown {unknown}; choose among {VARIANTS}")
+        p.error(f"--variant: unknown {unknown}; choose among {VARIANTS}")
     for name in ("duration", "training_duration", "validation_duration", "friction_scale", "push_force", "width_scale"):
         value = getattr(a, name)
         if not (value == value and 0 < value < 1e6):

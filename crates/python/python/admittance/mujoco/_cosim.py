@@ -1,13 +1,16 @@
 """The co-simulation: free-motion data, training, the admittance experiment, metrics, and
-the run folder."""
+the run folder.
+
+What is Python here is the MuJoCo plant, the contact, the truth and the orchestration: each
+variant steps the Rust loop (``adm.ClosedLoop``: sensor filter, observer stage with its
+input filter, low-pass and warm-up, admittance model, PD), its metrics and health checks
+(divergence) are the scenario runner's (``adm.VariantRecorder``), and its run folder is
+written by the same Rust code as ``admittance run``'s (``adm.write_run_folder``)."""
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import pathlib
-import shutil
 import tempfile
 import time
 from dataclasses import asdict, dataclass, field
@@ -18,7 +21,7 @@ import admittance as adm
 
 from ._plant import Encoder, MujocoArm
 
-VARIANTS = ["learned", "learned_friction", "momentum", "hybrid", "oracle"]
+VARIANTS = ["learned", "learned_friction", "momentum", "momentum_identified", "hybrid", "oracle"]
 
 
 @dataclass
@@ -41,7 +44,8 @@ class CosimConfig:
     # settings chosen on the validation recording; the residual network learns what the
     # identification leaves: the recipe of docs/experiments.md) or "nominal" (the URDF with
     # nominal_inertia_scale, as before issue 22). The momentum variant stays on the nominal
-    # model: the baseline that knows no friction.
+    # model: the baseline that knows no friction; momentum_identified runs on the
+    # identification.
     hybrid_nominal: str = "identified"
     nodes: int = 1000
     friction_scale: float = 1.0
@@ -214,19 +218,6 @@ def train_networks(m, m_nominal, data, validation, cfg):
     return nets
 
 
-def make_observer(variant, m_nominal, nets, cfg):
-    if variant in ("learned", "learned_friction"):
-        return adm.LearnedObserver(nets[variant])
-    if variant == "momentum":
-        return adm.MomentumObserver(m_nominal, gain=cfg.momentum_gain)
-    if variant == "hybrid":
-        # On the model its residual network was trained on.
-        identification = getattr(nets, "identification", None)
-        nominal = m_nominal if identification is None else identification
-        return adm.HybridObserver(nominal, nets["hybrid"], gain=cfg.momentum_gain)
-    return None  # oracle
-
-
 def experiment_motion(q0):
     """The desired motion of the experiment: joint 1 = 0.5 sin(2 pi t / 12) about the pose
     (the joint with the admittance, as s0 in experiment B) and every other joint on a slow
@@ -256,135 +247,93 @@ def push_profile(cfg, direction, magnitude):
     return at, (t0, t1)
 
 
-def run_variant(variant, arm, m, m_nominal, nets, q0, pd, cfg, rng, contact):
-    """One variant of the admittance experiment; returns its series and status."""
+#: Metrics are taken from here to the end (s), as a scenario's ``evaluation_start``.
+EVALUATION_START = 2.0
+#: One row of ``VARIANT.csv`` every this many control steps (a scenario's ``output.decimation``).
+DECIMATION = 10
+#: The loop's observer kind of each variant.
+OBSERVER_KIND = {
+    "learned": "learned",
+    "learned_friction": "learned",
+    "momentum": "momentum",
+    "momentum_identified": "momentum",
+    "hybrid": "hybrid",
+    "oracle": "oracle",
+}
+
+
+def loop_config(variant, cfg, m, q0, pd, identification_file=None):
+    """The loop of a variant as a scenario's tables (``[controller]``, ``[admittance]``,
+    ``[observer]``): PD on the compliant reference, the admittance model of experiment B on
+    joint 1 (the others stiff), and the variant's observer; ``identification_file``: the
+    identified arm that ``momentum_identified`` and the identified hybrid run on."""
+    n = m.n
+    identified = identification_file is not None and variant in ("momentum_identified", "hybrid")
+    stiff = [1e4] * (n - 1)
+    return {
+        "control_rate_hz": 1.0 / cfg.dt,
+        "controller": {"kind": "pd", "pd": pd, "subtract_estimate": False},
+        "admittance": {
+            "damping": [cfg.admittance_damping] + stiff,
+            "stiffness": [cfg.admittance_stiffness] + stiff,
+            "saturation": {
+                "rho": 0.95,
+                "centre": [float(x) for x in q0],
+                "half_range": [cfg.saturation_half_range] + [math.inf] * (n - 1),
+            },
+        },
+        "observer": {
+            "kind": OBSERVER_KIND[variant],
+            "nominal_inertia_scale": 1.0 if identified else cfg.nominal_inertia_scale,
+            **({"identification": str(identification_file)} if identified else {}),
+            "cutoff_hz": cfg.estimate_cutoff_hz,
+            "input_filter_hz": cfg.input_filter_hz,
+            "warmup": cfg.warmup,
+            "momentum": {"gain": cfg.momentum_gain},
+        },
+    }
+
+
+def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification_file=None):
+    """One variant of the admittance experiment: the Rust loop against the MuJoCo arm, every
+    step gathered by a ``VariantRecorder``; returns the finished recorder and the wall time
+    (s) of the stepping."""
     n = m.n
     dt = cfg.dt
     steps = int(round(cfg.duration / dt))
-    big = [1e4] * n
-    damping = [cfg.admittance_damping] + big[1:]
-    stiffness = [cfg.admittance_stiffness] + big[1:]
-    half = [cfg.saturation_half_range] + [math.inf] * (n - 1)
-    adm_config = {
-        "damping": damping,
-        "stiffness": stiffness,
-        "saturation": {"rho": 0.95, "centre": q0.tolist(), "half_range": half},
-    }
-    admittance = adm.Admittance.from_config(m, adm_config)
-    reference = adm.Admittance.from_config(m, adm_config)  # driven by the true torque
-    ctl = adm.PdController(m, pd)
-    observer = make_observer(variant, m_nominal, nets, cfg)
-    conditioner = adm.InputConditioner(n, cfg.input_filter_hz, 1.0 / dt)
-    sensors = Sensors(n, cfg, rng)
-    alpha = dt / (dt + 1.0 / (2 * math.pi * cfg.estimate_cutoff_hz))
+    if variant == "momentum_identified" and identification_file is None:
+        raise ValueError("momentum_identified needs the identification (hybrid_nominal = \"identified\")")
+    config = loop_config(variant, cfg, m, q0, pd, identification_file)
+    net = nets.get(variant)
+    closed_loop = adm.ClosedLoop(m, config, net, sensor_cutoff_hz=cfg.sensor_cutoff_hz)
+    recorder = adm.VariantRecorder(variant, m, config, cfg.duration, EVALUATION_START, DECIMATION)
+    encoder = Encoder()
     desired = experiment_motion(q0)
     arm.set_q(q0)
-    tau = np.zeros(n)
-    estimate = np.zeros(n)
-    tau_ext = np.zeros(n)
-    efforts = np.array(m.effort_limit)
-    decimation = 10
-    rows = []
-    series = {k: [] for k in ("q_d", "q_r", "q", "qdot", "q_meas", "tau_cmd", "tau_ext", "tau_ext_hat", "q_r_ref")}
-    diverged_at = None
-    reason = None
-    torque_violations = 0
-    observer_faults = 0
+    tau_ext = np.zeros(n)  # MuJoCo's external torque of the last step (the oracle's input)
+    out = (np.zeros(n), np.zeros(n))
     started = time.perf_counter()
     for k in range(steps):
         t = k * dt
-        q_f, qdot_f, qddot_f, tau_f = sensors.sample(arm.q(), tau)
-        # The estimate: the observer on the conditioned signals, low-passed, zero in warm-up.
-        if observer is None:
-            raw = tau_ext
-        else:
-            q_c, qdot_c, qddot_c, tau_c = conditioner.update(q_f, tau_f)
-            raw = np.array(observer.update(t, q_c, qdot_c, qddot_c, tau_c, dt))
-            if observer.fault is not None:
-                observer_faults += 1
-        if t < cfg.warmup and observer is not None:
-            raw = np.zeros(n)
-        estimate += alpha * (raw - estimate)
-        q_d, v_d, a_d = desired(t)
-        q_r, qdot_r, qddot_r = admittance.step(q_d, v_d, a_d, estimate, dt)
-        q_r_ref = reference.step(q_d, v_d, a_d, tau_ext, dt)[0]
-        tau = np.array(ctl.step(t, sensors.q_meas, qdot_f, q_r, qdot_r, qddot_r, np.zeros(n), dt))
-        torque_violations += int(np.sum(np.abs(tau) > efforts * (1 + 1e-9)))
+        q_d, qdot_d, qddot_d = desired(t)
+        # The command held over the period that just ended is the loop's own (tau=None).
+        tau, _ = closed_loop.step(t, encoder.read(arm.q(), rng), None, q_d, qdot_d, qddot_d,
+                                  tau_ext, out=out)
         force = contact.push(t) if contact.push is not None else None
         tau_ext = arm.step(tau, force)
-        q_true = arm.q()
-        if k % decimation == 0:
-            for key, value in (
-                ("q_d", q_d), ("q_r", np.array(q_r)), ("q", q_true), ("qdot", arm.qdot()),
-                ("q_meas", sensors.q_meas), ("tau_cmd", tau), ("tau_ext", tau_ext),
-                ("tau_ext_hat", estimate.copy()), ("q_r_ref", np.array(q_r_ref)),
-            ):
-                series[key].append(np.array(value, dtype=float))
-            rows.append(t)
-        if not np.all(np.isfinite(q_true)) or np.any(np.abs(q_true) > 1e3):
-            diverged_at, reason = t, "the MuJoCo plant's angles left physical bounds"
-        elif not np.all(np.isfinite(estimate)) or np.any(np.abs(estimate) > 10 * efforts):
-            diverged_at, reason = t, "the external-torque estimate exceeded 10 x the effort limit"
-        if diverged_at is not None:
-            break
+        if recorder.add(closed_loop, arm.q(), arm.qdot(), tau_ext) is not None:
+            break  # diverged: the scenario runner's health rules
     seconds = time.perf_counter() - started
-    out = {k: np.array(v) for k, v in series.items()}
-    out["t"] = np.array(rows)
-    return out, {
-        "diverged_at": diverged_at,
-        "reason": reason,
-        "torque_limit_violations": torque_violations,
-        "faults": int(ctl.fault_count),
-        "observer_faults": observer_faults,
-        "steps": k + 1,
-        "seconds": seconds,
-    }
+    recorder.finish(closed_loop, net)
+    return recorder, seconds
 
 
-def variant_metrics(series, status, cfg, validation_nrmse=None, m=None):
-    """The metrics of experiment B under the same names and definitions (docs/outputs.md)."""
-    t = series["t"]
-    window = t >= 2.0
-    true, hat = series["tau_ext"][window], series["tau_ext_hat"][window]
-    touching = np.abs(true) > 1e-9
-    in_contact = touching.any(axis=1)
-    joints = touching.any(axis=0)
-    err = (hat - true)[np.ix_(in_contact, joints)]
-    denominator = float(np.sum(true[np.ix_(in_contact, joints)] ** 2))
-    nrmse = math.sqrt(float(np.sum(err ** 2)) / denominator) if denominator > 0 else None
-    false_rms = [
-        float(np.sqrt(np.mean(hat[~touching[:, j], j] ** 2))) if np.any(~touching[:, j]) else 0.0
-        for j in range(hat.shape[1])
-    ]
-    half = cfg.saturation_half_range
-    centre = series["q_d"][0, 0] if len(series["q_d"]) else 0.0
-    q_r = series["q_r"]
-    violations = int(np.sum(np.abs(q_r[:, 0] - centre) >= half))
-    metrics = {
-        "diverged": status["diverged_at"] is not None,
-        "diverged_at": status["diverged_at"],
-        "external_torque_nrmse": nrmse,
-        "external_torque_rmse": np.sqrt(np.mean((hat - true) ** 2, axis=0)).tolist(),
-        "false_torque_rms": false_rms,
-        "reference_bound_violations": violations,
-        "admittance_error_rms": np.sqrt(np.mean((series["q_r"][window] - series["q_r_ref"][window]) ** 2, axis=0)).tolist(),
-        "tracking_rmse": np.sqrt(np.mean((series["q_r"][window] - series["q"][window]) ** 2, axis=0)).tolist(),
-        "torque_limit_violations": status["torque_limit_violations"],
-        "faults": status["faults"],
-        "observer_faults": status["observer_faults"],
-        "steps": status["steps"],
-        "cosim_seconds": status["seconds"],
-        "cosim_steps_per_second": status["steps"] / max(status["seconds"], 1e-9),
-    }
-    if m is not None:
-        lo, hi, effort = np.array(m.lower), np.array(m.upper), np.array(m.effort_limit)
-        q = series["q"]
-        metrics["q_limit_violation_fraction"] = np.mean((q < lo) | (q > hi), axis=0).tolist()
-        metrics["torque_saturation_fraction"] = np.mean(
-            np.abs(series["tau_cmd"]) >= effort * (1 - 1e-9), axis=0
-        ).tolist()
-    if validation_nrmse is not None:
-        metrics["validation_nrmse"] = list(validation_nrmse)
+def variant_metrics(recorder, seconds):
+    """The variant's metrics (the scenario runner's, computed in Rust) and the speed of its
+    co-simulation."""
+    metrics = dict(recorder.metrics)
+    metrics["cosim_seconds"] = seconds
+    metrics["cosim_steps_per_second"] = recorder.steps / max(seconds, 1e-9)
     return metrics
 
 
@@ -425,112 +374,81 @@ def plan_contact(cfg, m, q0, probe):
     return Contact("wall", wall=(centre.tolist(), [0.3, 0.3, thickness], (-tangent).tolist()), window=(0.0, cfg.duration))
 
 
-def _toml_value(v):
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return "inf" if v == math.inf else ("-inf" if v == -math.inf else repr(float(v)) if isinstance(v, float) else str(v))
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    return json.dumps(str(v))
+def _delayed_torque(data):
+    """Free-motion data as the Rust recorder pairs it (docs/outputs.md): the filtered command
+    one sample late, matching ``qddot``'s delay; the loop feeds its learned observers so."""
+    tau = data["tau"]
+    data["tau"] = np.vstack([np.zeros((1, tau.shape[1])), tau[:-1]])
+    return data
 
 
-def _check_out(out: pathlib.Path, force: bool):
-    """The CLI's rule: ``out`` may be new, empty, or a run folder this tool wrote."""
-    if not out.exists():
-        return
-    if not out.is_dir():
-        raise SystemExit(f"admittance.mujoco: --out {out}: is not a folder; choose another path (nothing was written)")
-    if not any(out.iterdir()):
-        return
-    try:
-        marker = json.loads((out / "summary.json").read_text()).get("format")
-    except (OSError, ValueError):
-        marker = None
-    if marker != "admittance-run" and not force:
-        raise SystemExit(
-            f"admittance.mujoco: --out {out}: is a folder this tool did not write (no summary.json "
-            "with \"format\": \"admittance-run\"); choose another folder, or pass --force to replace it"
-        )
+def scenario_as_run(cfg, m, tip, q0, pd):
+    """The co-simulation as a scenario file's keys (``scenario.toml`` of the run folder: it
+    loads as a scenario); what a scenario cannot say of MuJoCo is in ``summary.json``'s
+    ``cosim``."""
+    config = loop_config("momentum", cfg, m, q0, pd)
+    observer = dict(config.pop("observer"))
+    observer.pop("kind")
+    config.pop("control_rate_hz")  # plant.control_rate_hz in a scenario file
+    encoder = Encoder()
+    variants = {}
+    identified = getattr(cfg, "hybrid_nominal", "identified") == "identified"
+    for variant in cfg.variants:
+        spec = {"kind": OBSERVER_KIND[variant]}
+        if variant in ("learned", "learned_friction", "hybrid", "momentum_identified"):
+            spec["training"] = {
+                "data": "free_motion.csv",
+                "validation": "free_motion_validation.csv",
+                "nodes": cfg.nodes,
+                "friction_features": variant != "learned",
+                "seed": cfg.seed,
+                "width_scale": cfg.width_scale,
+                "cache": False,
+            }
+        if variant == "momentum_identified" or (variant == "hybrid" and identified):
+            spec["nominal_inertia_scale"] = 1.0
+            spec["training"]["identify"] = True
+        variants[variant] = {"observer": spec}
+    return {
+        "name": f"mujoco_{pathlib.Path(cfg.urdf).stem}",
+        "description": "Experiment B on the MuJoCo plant (python -m admittance.mujoco); plant, contact and truth are MuJoCo's",
+        "duration": cfg.duration,
+        "evaluation_start": EVALUATION_START,
+        "seed": cfg.seed,
+        "arm": {"urdf": str(pathlib.Path(cfg.urdf).resolve()), "base": cfg.base, "tip": tip},
+        "plant": {
+            "control_rate_hz": 1.0 / cfg.dt,
+            "sensors": {
+                "counts_per_rev": encoder.counts,
+                "noise_std": encoder.noise_std,
+                "seed": cfg.seed + 7,
+                "filter_cutoff_hz": cfg.sensor_cutoff_hz,
+            },
+        },
+        "output": {"decimation": DECIMATION},
+        **config,
+        "observer": observer,
+        "variants": variants,
+    }
 
 
-def write_run_folder(out, cfg, m, results, summary):
-    """Writes the run folder atomically: a hidden sibling, renamed into place at the end."""
-    out = pathlib.Path(out)
-    parent = out.parent
-    parent.mkdir(parents=True, exist_ok=True)
-    partial = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-{os.getpid()}-", dir=parent))
-    partial.chmod(0o777 & ~_umask())  # mkdtemp makes it 0700; a run folder is an ordinary one
-    (partial / ".admittance-partial").write_text("")
-    joints = m.joint_names
-    for variant, (series, _) in results.items():
-        cols = ["t"]
-        blocks = [series["t"][:, None]]
-        for prefix in ("q_d", "q_r", "q", "qdot", "q_meas", "tau_cmd", "tau_ext", "tau_ext_hat"):
-            cols += [f"{prefix}.{j}" for j in joints]
-            blocks.append(series[prefix])
-        cols += [f"tau_applied.{j}" for j in joints]
-        blocks.append(series["tau_cmd"])
-        table = np.hstack(blocks)
-        with open(partial / f"{variant}.csv", "w") as f:
-            f.write(",".join(cols) + "\n")
-            np.savetxt(f, table, delimiter=",", fmt="%.17g")
-    (partial / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
-    lines = [
-        f"# The MuJoCo co-simulation as run (python -m admittance.mujoco); plant: mujoco",
-        f"name = {_toml_value(summary['scenario'])}",
-        f"duration = {_toml_value(cfg.duration)}",
-        "evaluation_start = 2.0",
-        "",
-        "[arm]",
-        f"urdf = {_toml_value(str(pathlib.Path(cfg.urdf).resolve()))}",
-    ]
-    if cfg.base:
-        lines.append(f"base = {_toml_value(cfg.base)}")
-    if cfg.tip:
-        lines.append(f"tip = {_toml_value(cfg.tip)}")
-    n = m.n
-    lines += [
-        "",
-        "[admittance]",
-        f"damping = {_toml_value([cfg.admittance_damping] + [1e4] * (n - 1))}",
-        f"stiffness = {_toml_value([cfg.admittance_stiffness] + [1e4] * (n - 1))}",
-        "",
-        "[admittance.saturation]",
-        "rho = 0.95",
-        f"centre = {_toml_value(summary['pose'])}",
-        f"half_range = {_toml_value([cfg.saturation_half_range] + [math.inf] * (n - 1))}",
-        "",
-        "[cosim]",
-    ]
-    for k, v in asdict(cfg).items():
-        if v is not None and k not in ("urdf", "base", "tip"):
-            lines.append(f"{k} = {_toml_value(v)}")
-    (partial / "scenario.toml").write_text("\n".join(lines) + "\n")
-    (partial / ".admittance-partial").unlink()
-    if out.exists():
-        old = parent / f".{out.name}.old-{os.getpid()}"
-        out.rename(old)
-        partial.rename(out)
-        shutil.rmtree(old)
-    else:
-        partial.rename(out)
-
-
-def _umask():
-    """The process's umask (read by setting it, then restoring it)."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
+def write_run_folder(out, cfg, m, tip, q0, pd, recorders, extra):
+    """Writes the run folder with the Rust writer of ``admittance run`` (atomic; the same
+    files, metrics and ``scenario.toml``); returns ``(summary, failures)``."""
+    return adm.write_run_folder(
+        str(out), scenario_as_run(cfg, m, tip, q0, pd), recorders, extra, force=cfg.force,
+        protect=str(pathlib.Path(cfg.urdf).resolve()),
+        header="The MuJoCo co-simulation as run (python -m admittance.mujoco); plant: mujoco",
+    )
 
 
 def run_cosimulation(cfg: CosimConfig, log=print):
-    """The whole co-simulation; returns the summary dict (also in ``cfg.out``)."""
+    """The whole co-simulation; returns the summary dict (also in ``cfg.out``) with the
+    ``failures`` (a divergence, a metric not finite)."""
     out = pathlib.Path(cfg.out)
-    _check_out(out, cfg.force)
+    adm.check_out_dir(str(out), force=cfg.force, protect=str(pathlib.Path(cfg.urdf).resolve()))
     urdf_text = pathlib.Path(cfg.urdf).read_text()
     m = adm.Model.from_urdf(cfg.urdf, base=cfg.base, tip=cfg.tip)
-    n = m.n
     tip = cfg.tip or m.tip_link  # without --tip, the CLI's rule (Model.from_urdf above)
     rng = np.random.default_rng(cfg.seed)
     q0 = home_pose(m)
@@ -538,63 +456,48 @@ def run_cosimulation(cfg: CosimConfig, log=print):
     m_nominal = m.with_scaled_inertias(cfg.nominal_inertia_scale)
     probe = MujocoArm(urdf_text, m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale)
     contact = plan_contact(cfg, m, q0, probe)
-    needs_training = any(v in ("learned", "learned_friction", "hybrid") for v in cfg.variants)
+    needs_training = any(
+        v in ("learned", "learned_friction", "hybrid", "momentum_identified") for v in cfg.variants
+    )
     nets = {}
-    train_seconds = 0.0
     if needs_training:
         started = time.perf_counter()
         data = record_free_motion(probe, m, q0, pd, cfg, rng, cfg.training_duration)
         validation = record_free_motion(probe, m, q0, pd, cfg, np.random.default_rng(cfg.seed + 1000), cfg.validation_duration)
+        data, validation = _delayed_torque(data), _delayed_torque(validation)
         log(f"free-motion data: {cfg.training_duration:.0f} s + {cfg.validation_duration:.0f} s of validation in {time.perf_counter() - started:.1f} s")
-        started = time.perf_counter()
         nets = train_networks(m, m_nominal, data, validation, cfg)
-        train_seconds = time.perf_counter() - started
         for name, net in nets.items():
             log(f"{name}: validation NRMSE {np.round(net.validation_nrmse, 3).tolist()}")
-    results = {}
-    variants = {}
-    failures = []
+    recorders = []
+    speed = {}
+    # The loop reads an identification from its file (as a robot program does).
+    scratch = tempfile.TemporaryDirectory(prefix="admittance-cosim-")
+    identification_file = None
+    if getattr(nets, "identification", None) is not None:
+        identification_file = pathlib.Path(scratch.name) / "identification.json"
+        nets.identification.save(str(identification_file))
     for variant in cfg.variants:
         arm = MujocoArm(urdf_text, m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale, contact.wall)
-        series, status = run_variant(variant, arm, m, m_nominal, nets, q0, pd, cfg, np.random.default_rng(cfg.seed + 7), contact)
-        metrics = variant_metrics(
-            series, status, cfg, nets[variant].validation_nrmse if variant in nets else None, m
+        recorder, seconds = run_variant(
+            variant, arm, m, nets, q0, pd, cfg, np.random.default_rng(cfg.seed + 7), contact, identification_file
         )
-        if variant in nets:
-            metrics["train_seconds"] = train_seconds / len(nets)
-        results[variant] = (series, status)
-        variants[variant] = metrics
+        metrics = variant_metrics(recorder, seconds)
+        recorders.append(recorder)
+        speed[variant] = {k: metrics[k] for k in ("cosim_seconds", "cosim_steps_per_second")}
         log(
             f"{variant}: external-torque NRMSE {metrics['external_torque_nrmse']}, bound violations "
-            f"{metrics['reference_bound_violations']}, {status['steps']} steps in {status['seconds']:.1f} s "
+            f"{metrics['reference_bound_violations']}, {recorder.steps} steps in {seconds:.1f} s "
             f"({metrics['cosim_steps_per_second']:.0f} steps/s)"
         )
-        if status["diverged_at"] is not None:
-            failures.append(f"variant `{variant}` diverged at t = {status['diverged_at']:.3f} s: {status['reason']}")
-    summary = {
-        "format": "admittance-run",
-        "format_version": 1,
-        "scenario": f"mujoco_{pathlib.Path(cfg.urdf).stem}",
+    settings = {k: v for k, v in asdict(cfg).items() if v is not None and k not in ("force",)}
+    extra = {
         "plant": "mujoco",
-        "joints": m.joint_names,
-        "variants": dict(sorted(variants.items())),
-        "variant_order": list(cfg.variants),
         "pose": q0.tolist(),
         "contact": contact.kind,
         "unknown_joint_terms": probe.terms,
+        "cosim": {"settings": settings, "speed": speed},
     }
-    _check_finite(summary, failures)
-    write_run_folder(out, cfg, m, results, summary)
+    summary, failures = write_run_folder(out, cfg, m, tip, q0, pd, recorders, extra)
     summary["failures"] = failures
     return summary
-
-
-def _check_finite(summary, failures):
-    for name, metrics in summary["variants"].items():
-        for key, value in metrics.items():
-            values = value if isinstance(value, list) else [value]
-            for v in values:
-                if isinstance(v, float) and not math.isfinite(v):
-                    failures.append(f"variant `{name}`: {key} is not finite")
-                    metrics[key] = None
-                    break

@@ -1,0 +1,172 @@
+//! Writing a run folder (the one writer of `admittance run`, the Python package's
+//! co-simulation and any other front end): every file goes into a hidden partial sibling
+//! (`.NAME.partial-PID`, marked as this tool's work in progress), which is renamed into place
+//! at the end, so that a failed or interrupted run never leaves a folder that looks
+//! complete; time series are CSV with the shortest round-trip form of every value.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The file inside a partial folder that marks it as this tool's work in progress.
+pub const PARTIAL_MARKER: &str = ".admittance-partial";
+
+/// Writes a time series as CSV: a header row of `columns`, then one line per row.
+pub fn write_series_csv(path: &Path, columns: &[String], rows: &[Vec<f64>]) -> std::io::Result<()> {
+    let file = std::fs::File::create(path)?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "{}", columns.join(","))?;
+    let mut line = String::new();
+    for row in rows {
+        line.clear();
+        for (k, v) in row.iter().enumerate() {
+            if k > 0 {
+                line.push(',');
+            }
+            use std::fmt::Write as _;
+            let _ = write!(line, "{v}");
+        }
+        writeln!(w, "{line}")?;
+    }
+    w.flush()
+}
+
+/// Removes partial folders (`.NAME.partial-PID`) left in `parent` by runs that were
+/// killed: only those holding this tool's marker whose process no longer exists.
+/// Returns the folders removed.
+pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return removed;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Some(pid) = name
+            .strip_prefix('.')
+            .and_then(|n| n.rsplit_once(".partial-"))
+            .and_then(|(_, pid)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let path = e.path();
+        let ours = path.join(PARTIAL_MARKER).is_file();
+        if ours
+            && pid != std::process::id()
+            && !process_alive(pid)
+            && std::fs::remove_dir_all(&path).is_ok()
+        {
+            removed.push(path);
+        }
+    }
+    removed
+}
+
+/// Whether a process exists (Linux: `/proc/PID`; elsewhere assumed alive, so nothing is
+/// removed that might still be written).
+fn process_alive(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return true;
+    }
+    proc.join(pid.to_string()).exists()
+}
+
+/// Writes the folder `out_dir` through a hidden partial sibling (`fill` writes into it; an
+/// error there removes it) and renames it into place, replacing what is at `out_dir` (the
+/// caller decides before whether it may: [`crate::summary::classify_out`]). `io` turns an
+/// I/O error at a path into the caller's error type.
+pub fn write_folder<E>(
+    out_dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), E>,
+    io: impl Fn(&Path, std::io::Error) -> E,
+) -> Result<(), E> {
+    let parent = out_dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+    remove_stale_partials(parent);
+    let leaf = out_dir
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "run".into());
+    let partial = parent.join(format!(".{leaf}.partial-{}", std::process::id()));
+    if partial.join(PARTIAL_MARKER).is_file() {
+        let _ = std::fs::remove_dir_all(&partial);
+    }
+    std::fs::create_dir(&partial).map_err(|e| io(&partial, e))?;
+    let marker = partial.join(PARTIAL_MARKER);
+    let result = std::fs::write(&marker, "admittance run in progress\n")
+        .map_err(|e| io(&marker, e))
+        .and_then(|_| fill(&partial));
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&partial);
+        return Err(e);
+    }
+    // From here to the end the partial folder may be the only complete copy: an interrupt's
+    // clean-up waits (`crate::commit_guard`).
+    let _commit = crate::commit_guard();
+    let _ = std::fs::remove_file(&marker);
+    let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
+    let replaced = std::fs::symlink_metadata(out_dir).is_ok();
+    if replaced {
+        std::fs::rename(out_dir, &old).map_err(|e| io(out_dir, e))?;
+    }
+    if let Err(e) = std::fs::rename(&partial, out_dir) {
+        if replaced {
+            let _ = std::fs::rename(&old, out_dir);
+        }
+        return Err(io(out_dir, e));
+    }
+    if replaced {
+        let _ = std::fs::remove_dir_all(&old);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_fill_leaves_nothing_and_a_good_one_replaces_the_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("old.csv"), "old").unwrap();
+        let io = |p: &Path, e: std::io::Error| format!("{}: {e}", p.display());
+        let failed = write_folder(
+            &out,
+            |partial| {
+                std::fs::write(partial.join("a.csv"), "x").unwrap();
+                Err("broken".to_string())
+            },
+            io,
+        );
+        assert_eq!(failed, Err("broken".to_string()));
+        assert!(out.join("old.csv").is_file());
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "no partial left"
+        );
+        write_folder(
+            &out,
+            |partial| {
+                write_series_csv(
+                    &partial.join("a.csv"),
+                    &["t".into(), "x".into()],
+                    &[vec![0.0, 0.1]],
+                )
+                .map_err(|e| e.to_string())
+            },
+            io,
+        )
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(out.join("a.csv")).unwrap(),
+            "t,x\n0,0.1\n"
+        );
+        assert!(!out.join("old.csv").exists() && !out.join(PARTIAL_MARKER).exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}
