@@ -8,9 +8,10 @@
 //! | code | meaning |
 //! |---|---|
 //! | 0 | success |
-//! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
+//! | 1 | a run failed (a variant diverged or a metric is not finite, writing outputs, a numerical failure in training, the report) |
 //! | 2 | bad command-line arguments (usage) |
 //! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder, bag, profile |
+//! | 4 | `run`: the run finished and wrote its folder, but a variant broke a health rule of severity failure (docs/outputs.md, "Health") |
 //! | 130 | interrupted (Ctrl-C): one line says so; nothing of the user's was changed |
 //!
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,

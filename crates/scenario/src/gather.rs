@@ -7,7 +7,7 @@ use admittance_loop::{ClosedLoop, LoopStatus, Measurement};
 use admittance_sim::StepRecord;
 
 use crate::hand::HandStats;
-use crate::health::Health;
+use admittance_loop::HealthMonitor as Health;
 use crate::metrics::{median, rms, JointStats, ObserverStats, VariantMetrics};
 
 /// Controller step times kept for the median (at most; evenly strided over the run).

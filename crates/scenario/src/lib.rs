@@ -36,7 +36,6 @@ mod error;
 mod free_motion;
 mod gather;
 mod hand;
-mod health;
 mod limits;
 mod metrics;
 mod node_events;
@@ -53,14 +52,14 @@ mod trajectory;
 
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
-pub use health::Divergence;
+pub use admittance_loop::Divergence;
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
 pub use robot::{robot_loop, RobotLoop};
 pub use run_folder::{
     check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants, write_series_csv,
-    RunError, RunSummary,
+    RunError, RunSummary, STOPPING_RULES,
 };
 pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};

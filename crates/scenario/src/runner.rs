@@ -13,7 +13,7 @@ use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};
 use crate::hand::HandKinematics;
-use crate::health::Divergence;
+use admittance_loop::Divergence;
 use crate::metrics::VariantMetrics;
 use crate::node_events::NodeEvents;
 use crate::progress::{RunOptions, Stage};
@@ -44,6 +44,8 @@ pub struct VariantRun {
     pub divergence: Option<Divergence>,
     /// What the URDF loader accepted with a warning (`file:line: element: problem`).
     pub arm_warnings: Vec<String>,
+    /// The thresholds of the health rules for this variant (`[health]`).
+    pub health_settings: admittance_runfolder::health::HealthSettings,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -219,6 +221,7 @@ fn simulate_variant(
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
+    run.health_settings = scenario.health.clone();
     Ok(run)
 }
 
@@ -263,5 +266,6 @@ fn finish(
         observer_validation,
         divergence: health.divergence,
         arm_warnings: Vec::new(),
+        health_settings: Default::default(),
     })
 }
