@@ -50,6 +50,7 @@ mod spec;
 mod training;
 mod trajectory;
 
+pub use assemble::gain_warnings;
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use admittance_loop::Divergence;

@@ -42,7 +42,8 @@ pub struct VariantRun {
     pub observer_validation: Option<TimeSeries>,
     /// Why and when the variant stopped early, if it did.
     pub divergence: Option<Divergence>,
-    /// What the URDF loader accepted with a warning (`file:line: element: problem`).
+    /// What the URDF loader accepted with a warning (`file:line: element: problem`), then
+    /// the gain rules' warnings (`scenario:line: key ...: problem; hint: ...`).
     pub arm_warnings: Vec<String>,
     /// The thresholds of the health rules for this variant (`[health]`).
     pub health_settings: admittance_runfolder::health::HealthSettings,
