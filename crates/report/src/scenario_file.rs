@@ -216,6 +216,7 @@ mod tests {
             joints: vec!["a".into(), "b".into()],
             variants: Vec::new(),
             warnings: Vec::new(),
+            health: None,
             scenario_toml: Some(toml.parse().unwrap()),
             free_motion: Vec::new(),
             node_weights: Vec::new(),

@@ -60,6 +60,7 @@ fn folder_with(scenario: &str, variants: &[(&str, Table)], toml: &str) -> RunFol
             })
             .collect(),
         warnings: Vec::new(),
+        health: None,
         scenario_toml: Some(toml.parse().unwrap()),
         free_motion: Vec::new(),
         node_weights: Vec::new(),
