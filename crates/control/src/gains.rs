@@ -115,7 +115,11 @@ pub fn round2(x: f64, up: bool) -> f64 {
         return x;
     }
     let scale = 10f64.powf(x.log10().floor() - 1.0);
-    let r = if up { (x / scale).ceil() } else { (x / scale).floor() };
+    let r = if up {
+        (x / scale).ceil()
+    } else {
+        (x / scale).floor()
+    };
     // The nearest double to the 2-digit decimal, so that it prints as written.
     format!("{:.1e}", r * scale).parse().unwrap_or(r * scale)
 }
@@ -261,27 +265,71 @@ mod tests {
     #[test]
     fn the_adaptive_bound_names_the_joint_and_a_value_that_passes() {
         let joints = ["s0".to_string(), "w0".to_string()];
-        let advice = check_feedback("k2", &joints, &[12.0; 2], &[6.0, 2.0], &inertia(), &limits(0.0));
+        let advice = check_feedback(
+            "k2",
+            &joints,
+            &[12.0; 2],
+            &[6.0, 2.0],
+            &inertia(),
+            &limits(0.0),
+        );
         assert_eq!(advice.len(), 1, "{advice:?}");
-        assert_eq!((advice[0].rule, advice[0].joint.as_str()), ("k2_adaptive_bound", "s0"));
+        assert_eq!(
+            (advice[0].rule, advice[0].joint.as_str()),
+            ("k2_adaptive_bound", "s0")
+        );
         assert!(advice[0].message.contains("s0") && advice[0].message.contains("17.52"));
         let fixed = [advice[0].suggested, 2.0];
-        assert!(check_feedback("k2", &joints, &[12.0; 2], &fixed, &inertia(), &limits(0.0)).is_empty());
+        assert!(
+            check_feedback("k2", &joints, &[12.0; 2], &fixed, &inertia(), &limits(0.0)).is_empty()
+        );
     }
 
     #[test]
     fn the_bandwidth_rule_counts_the_known_friction() {
         let joints = ["s0".to_string(), "w0".to_string()];
         // w0 at K2 = 6: 194 rad/s against 126 (the wrist that chattered).
-        let advice = check_feedback("k2", &joints, &[12.0; 2], &[20.0, 6.0], &inertia(), &limits(0.0));
+        let advice = check_feedback(
+            "k2",
+            &joints,
+            &[12.0; 2],
+            &[20.0, 6.0],
+            &inertia(),
+            &limits(0.0),
+        );
         assert_eq!(advice.len(), 1);
-        assert_eq!((advice[0].rule, advice[0].joint.as_str()), ("k2_velocity_bandwidth", "w0"));
+        assert_eq!(
+            (advice[0].rule, advice[0].joint.as_str()),
+            ("k2_velocity_bandwidth", "w0")
+        );
         assert!(advice[0].suggested <= limits(0.0).max_k2(1, 0.031));
         assert!(advice[0].suggested > 12.0 * 0.031);
         // K2 below the viscous friction: no crossover at all.
-        let light = JointInertia { min: vec![1.4, 0.0006], max: vec![1.46, 0.0006] };
-        assert!(check_feedback("k2", &joints, &[12.0; 2], &[20.0, 0.2], &light, &limits(0.3)).is_empty());
-        assert_eq!(check_feedback("k2", &joints, &[12.0; 2], &[20.0, 0.2], &light, &limits(0.0)).len(), 1);
+        let light = JointInertia {
+            min: vec![1.4, 0.0006],
+            max: vec![1.46, 0.0006],
+        };
+        assert!(check_feedback(
+            "k2",
+            &joints,
+            &[12.0; 2],
+            &[20.0, 0.2],
+            &light,
+            &limits(0.3)
+        )
+        .is_empty());
+        assert_eq!(
+            check_feedback(
+                "k2",
+                &joints,
+                &[12.0; 2],
+                &[20.0, 0.2],
+                &light,
+                &limits(0.0)
+            )
+            .len(),
+            1
+        );
     }
 
     #[test]
@@ -290,7 +338,10 @@ mod tests {
         assert!(check_admittance("admittance", &joints, &[3.0], &[5.0], None, 5.0).is_empty());
         let a = check_admittance("admittance", &joints, &[0.1], &[5.0], None, 5.0);
         assert_eq!(a.len(), 1);
-        assert!(check_admittance("admittance", &joints, &[a[0].suggested], &[5.0], None, 5.0).is_empty());
+        assert!(
+            check_admittance("admittance", &joints, &[a[0].suggested], &[5.0], None, 5.0)
+                .is_empty()
+        );
         assert!(check_admittance("admittance", &joints, &[0.1], &[5.0], None, 0.0).is_empty());
     }
 

@@ -16,8 +16,8 @@
 // Bounds are written `!(x <= bound)` on purpose: a NaN fails them.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use admittance_dynamics::Model;
 use crate::Measurement;
+use admittance_dynamics::Model;
 
 /// Largest meaningful angle (rad): about 160 turns.
 pub const MAX_ANGLE: f64 = 1.0e3;

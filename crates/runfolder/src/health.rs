@@ -108,7 +108,12 @@ impl HealthSettings {
         self.thresholds()
             .into_iter()
             .filter(|(_, v)| !(*v >= 0.0))
-            .map(|(k, v)| (k, format!("is {v}, must be >= 0 (inf switches the rule off)")))
+            .map(|(k, v)| {
+                (
+                    k,
+                    format!("is {v}, must be >= 0 (inf switches the rule off)"),
+                )
+            })
             .collect()
     }
 }
@@ -203,7 +208,11 @@ pub fn assess(
     settings: &HealthSettings,
 ) -> Vec<Verdict> {
     let mut out = Vec::new();
-    let verdict = |rule: &str, joint: Option<&str>, value: Option<f64>, threshold: Option<f64>, message: String| {
+    let verdict = |rule: &str,
+                   joint: Option<&str>,
+                   value: Option<f64>,
+                   threshold: Option<f64>,
+                   message: String| {
         let r = self::rule(rule).expect("a rule of RULES");
         Verdict {
             rule: rule.to_string(),
@@ -214,7 +223,11 @@ pub fn assess(
             message,
         }
     };
-    let joint_name = |k: usize| joints.get(k).map_or_else(|| format!("joint {}", k + 1), Clone::clone);
+    let joint_name = |k: usize| {
+        joints
+            .get(k)
+            .map_or_else(|| format!("joint {}", k + 1), Clone::clone)
+    };
 
     if metrics.get(m::DIVERGED).and_then(Value::as_bool) == Some(true) {
         let at = number(metrics, m::DIVERGED_AT);
@@ -258,7 +271,10 @@ pub fn assess(
             None,
             None,
             None,
-            format!("metrics that are not finite (null in summary.json): {}", bad.join(", ")),
+            format!(
+                "metrics that are not finite (null in summary.json): {}",
+                bad.join(", ")
+            ),
         ));
     }
     let violations = number(metrics, m::TORQUE_LIMIT_VIOLATIONS).unwrap_or(0.0)
@@ -354,12 +370,30 @@ pub fn assess(
         }
     }
     for (rule, metric, what) in [
-        ("controller_faults", m::FAULTS, "control steps with a controller fault (safe hold applied)"),
-        ("observer_faults", m::OBSERVER_FAULTS, "observer updates that reported a fault"),
-        ("reference_bound", m::REFERENCE_BOUND_VIOLATIONS, "samples x joints with q_r outside its saturation bound"),
+        (
+            "controller_faults",
+            m::FAULTS,
+            "control steps with a controller fault (safe hold applied)",
+        ),
+        (
+            "observer_faults",
+            m::OBSERVER_FAULTS,
+            "observer updates that reported a fault",
+        ),
+        (
+            "reference_bound",
+            m::REFERENCE_BOUND_VIOLATIONS,
+            "samples x joints with q_r outside its saturation bound",
+        ),
     ] {
         if let Some(n) = number(metrics, metric).filter(|n| *n > 0.0) {
-            out.push(verdict(rule, None, Some(n), None, format!("{n} {what} (`{metric}`)")));
+            out.push(verdict(
+                rule,
+                None,
+                Some(n),
+                None,
+                format!("{n} {what} (`{metric}`)"),
+            ));
         }
     }
     out.sort_by_key(|v| std::cmp::Reverse(v.severity));
@@ -398,14 +432,23 @@ pub fn status(verdicts: &[Verdict]) -> &'static str {
 
 /// The `health` object of `summary.json` ([`crate::summary::KEY_HEALTH`]):
 /// `{"status": worst, "variants": {VARIANT: {"status", "settings", "verdicts"}}}`.
-pub fn summary_value<'a>(variants: impl IntoIterator<Item = (&'a str, &'a VariantHealth)>) -> Value {
+pub fn summary_value<'a>(
+    variants: impl IntoIterator<Item = (&'a str, &'a VariantHealth)>,
+) -> Value {
     let mut worst = "ok";
     let mut map = Map::new();
     for (name, h) in variants {
         if h.status == "failure" || (h.status == "warning" && worst == "ok") {
-            worst = if h.status == "failure" { "failure" } else { "warning" };
+            worst = if h.status == "failure" {
+                "failure"
+            } else {
+                "warning"
+            };
         }
-        map.insert(name.to_string(), serde_json::to_value(h).unwrap_or(Value::Null));
+        map.insert(
+            name.to_string(),
+            serde_json::to_value(h).unwrap_or(Value::Null),
+        );
     }
     json!({"status": worst, "variants": Value::Object(map)})
 }
@@ -425,7 +468,12 @@ pub fn read(summary: &Value) -> Option<Vec<(String, VariantHealth)>> {
 
 /// One console line per verdict: `failure: VARIANT: [joint] message (rule)`.
 pub fn console_line(variant: &str, v: &Verdict) -> String {
-    format!("{}: `{variant}`: {} [{}]", v.severity.as_str(), v.message, v.rule)
+    format!(
+        "{}: `{variant}`: {} [{}]",
+        v.severity.as_str(),
+        v.message,
+        v.rule
+    )
 }
 
 #[cfg(test)]
@@ -459,19 +507,31 @@ mod tests {
         let s = HealthSettings::default();
         let mut m = healthy();
         m.insert("ee_error_max".into(), json!(s.max_hand_error));
-        assert!(assess(&m, &joints(), &s).is_empty(), "at the bound is inside");
+        assert!(
+            assess(&m, &joints(), &s).is_empty(),
+            "at the bound is inside"
+        );
         m.insert("ee_error_max".into(), json!(s.max_hand_error * 1.001));
         let v = assess(&m, &joints(), &s);
         assert_eq!(v.len(), 1);
-        assert_eq!((v[0].rule.as_str(), v[0].severity), ("hand_error", Severity::Failure));
+        assert_eq!(
+            (v[0].rule.as_str(), v[0].severity),
+            ("hand_error", Severity::Failure)
+        );
         let mut m = healthy();
         m.insert("torque_saturation_fraction".into(), json!([0.0, 0.02]));
         m.insert("stale_measurements".into(), json!(3));
         let v = assess(&m, &joints(), &s);
-        assert_eq!(v.iter().map(|v| v.rule.as_str()).collect::<Vec<_>>(), ["effort_saturation", "stale_data"]);
+        assert_eq!(
+            v.iter().map(|v| v.rule.as_str()).collect::<Vec<_>>(),
+            ["effort_saturation", "stale_data"]
+        );
         assert_eq!(v[0].joint.as_deref(), Some("b"));
         assert_eq!(status(&v), "failure");
-        let off = HealthSettings { max_effort_saturation: f64::INFINITY, ..s.clone() };
+        let off = HealthSettings {
+            max_effort_saturation: f64::INFINITY,
+            ..s.clone()
+        };
         assert_eq!(status(&assess(&m, &joints(), &off)), "warning");
     }
 
@@ -483,14 +543,21 @@ mod tests {
         m.insert("tracking_rmse".into(), json!([0.1, null]));
         let v = assess(&m, &joints(), &HealthSettings::default());
         assert_eq!(v[0].rule, "divergence");
-        assert!(v[1].message.contains("`tracking_rmse` of b"), "{}", v[1].message);
+        assert!(
+            v[1].message.contains("`tracking_rmse` of b"),
+            "{}",
+            v[1].message
+        );
     }
 
     #[test]
     fn verdicts_round_trip_through_the_summary() {
         let mut m = healthy();
         m.insert("faults".into(), json!(2));
-        let h = VariantHealth::new(HealthSettings::default(), assess(&m, &joints(), &HealthSettings::default()));
+        let h = VariantHealth::new(
+            HealthSettings::default(),
+            assess(&m, &joints(), &HealthSettings::default()),
+        );
         let summary = json!({ "health": summary_value([("x", &h)]) });
         assert_eq!(summary["health"]["status"], "warning");
         assert_eq!(read(&summary).unwrap(), vec![("x".to_string(), h)]);
@@ -499,11 +566,35 @@ mod tests {
 
     #[test]
     fn every_rule_with_a_setting_names_a_real_one() {
-        let keys: Vec<&str> = HealthSettings::default().thresholds().iter().map(|(k, _)| *k).collect();
+        let keys: Vec<&str> = HealthSettings::default()
+            .thresholds()
+            .iter()
+            .map(|(k, _)| *k)
+            .collect();
         for r in RULES {
-            assert!(r.setting.is_empty() || keys.contains(&r.setting), "{}", r.name);
+            assert!(
+                r.setting.is_empty() || keys.contains(&r.setting),
+                "{}",
+                r.name
+            );
         }
-        assert!(HealthSettings { max_hand_error: -1.0, ..Default::default() }.problems().len() == 1);
-        assert!(HealthSettings { max_hand_error: f64::NAN, ..Default::default() }.problems().len() == 1);
+        assert!(
+            HealthSettings {
+                max_hand_error: -1.0,
+                ..Default::default()
+            }
+            .problems()
+            .len()
+                == 1
+        );
+        assert!(
+            HealthSettings {
+                max_hand_error: f64::NAN,
+                ..Default::default()
+            }
+            .problems()
+            .len()
+                == 1
+        );
     }
 }

@@ -125,7 +125,12 @@ pub(crate) fn assemble(
 /// The gain rules' warnings of a resolved, valid scenario (`Scenario::gain_warnings`) over
 /// 200 poses of its desired motion, with the plant's viscous friction, each located at its
 /// key and line (`file:line: key ...: problem; hint: ...`).
-fn gain_warning_lines(ctx: &Ctx<'_>, scenario: &Scenario, model: &Model, trajectory: &Trajectory) -> Vec<String> {
+fn gain_warning_lines(
+    ctx: &Ctx<'_>,
+    scenario: &Scenario,
+    model: &Model,
+    trajectory: &Trajectory,
+) -> Vec<String> {
     let n = model.nq();
     let poses: Vec<Vec<f64>> = (0..200)
         .map(|k| {
@@ -169,7 +174,11 @@ pub fn gain_warnings(
     if !problems.is_empty() {
         return Err(source.invalid(variant, &problems));
     }
-    let trajectory = Trajectory::new(&scenario.trajectory, &joints, &crate::spec::mid_range(&model));
+    let trajectory = Trajectory::new(
+        &scenario.trajectory,
+        &joints,
+        &crate::spec::mid_range(&model),
+    );
     Ok(gain_warning_lines(&ctx, &scenario, &model, &trajectory))
 }
 

@@ -50,10 +50,10 @@ mod spec;
 mod training;
 mod trajectory;
 
+pub use admittance_loop::Divergence;
 pub use assemble::gain_warnings;
 pub use error::{Invalid, ScenarioError};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
-pub use admittance_loop::Divergence;
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};

@@ -247,7 +247,8 @@ pub fn run_scenario_variants(
         .resolve::<Scenario>(selected[0].as_deref())?
         .evaluation_start;
     crate::hand::across_variants(&mut runs, evaluation_start);
-    let judged: Vec<(String, VariantHealth)> = runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
+    let judged: Vec<(String, VariantHealth)> =
+        runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
     let summary = summary_json(&scenario_name, &runs, &judged);
     write_folder(out_dir, path, force, |partial| {
         for run in &runs {
@@ -274,7 +275,11 @@ pub fn run_scenario_variants(
     let mut failures = Vec::new();
     let mut health_failures = Vec::new();
     for (name, h) in &judged {
-        for v in h.verdicts.iter().filter(|v| v.severity == Severity::Failure) {
+        for v in h
+            .verdicts
+            .iter()
+            .filter(|v| v.severity == Severity::Failure)
+        {
             if v.rule == "divergence" {
                 failures.push(format!("variant `{name}` {}", v.message));
             } else if STOPPING_RULES.contains(&v.rule.as_str()) {

@@ -13,13 +13,13 @@ use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};
 use crate::hand::HandKinematics;
-use admittance_loop::Divergence;
 use crate::metrics::VariantMetrics;
 use crate::node_events::NodeEvents;
 use crate::progress::{RunOptions, Stage};
 use crate::recorder::{Recorder, Row};
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
+use admittance_loop::Divergence;
 
 /// The outcome of one variant.
 #[derive(Clone, Debug)]

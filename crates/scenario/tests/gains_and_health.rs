@@ -10,7 +10,10 @@ use admittance_scenario::{gain_warnings, run_scenario, RunOptions, ScenarioSourc
 /// Every committed scenario and every variant loads without a gain warning.
 #[test]
 fn the_committed_scenarios_pass_the_gain_rules() {
-    let dir = scenario_path("deadzone.toml").parent().unwrap().to_path_buf();
+    let dir = scenario_path("deadzone.toml")
+        .parent()
+        .unwrap()
+        .to_path_buf();
     let mut checked = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
@@ -18,7 +21,8 @@ fn the_committed_scenarios_pass_the_gain_rules() {
             continue;
         }
         let source = ScenarioSource::load(&path).unwrap();
-        let mut variants: Vec<Option<String>> = source.variant_names().into_iter().map(Some).collect();
+        let mut variants: Vec<Option<String>> =
+            source.variant_names().into_iter().map(Some).collect();
         if variants.is_empty() {
             variants.push(None);
         }
@@ -28,7 +32,11 @@ fn the_committed_scenarios_pass_the_gain_rules() {
                 // Experiment C swings e1 and s1 under s0: s0's inertia reaches 2.87 kg m^2
                 // and K1 I 34 > 30, a warning the file explains (a sufficient condition).
                 assert_eq!(w.len(), 1, "{w:#?}");
-                assert!(w[0].contains("K2 of left_s0 is 30") && w[0].contains("dynamic_nodes.toml:"), "{}", w[0]);
+                assert!(
+                    w[0].contains("K2 of left_s0 is 30") && w[0].contains("dynamic_nodes.toml:"),
+                    "{}",
+                    w[0]
+                );
                 continue;
             }
             assert!(w.is_empty(), "{} {v:?}: {w:#?}", path.display());
@@ -58,25 +66,43 @@ fn a_bad_gain_names_the_joint_and_a_value_that_passes() {
         ("left_w2", "crosses over"),
     ] {
         assert!(
-            w.iter().any(|l| l.contains(&format!("({j})")) && l.contains(rule)),
+            w.iter()
+                .any(|l| l.contains(&format!("({j})")) && l.contains(rule)),
             "{j} {rule}: {w:#?}"
         );
     }
     let s0 = w.iter().find(|l| l.contains("(left_s0)")).unwrap();
     // Located where the value was written: here the override.
-    assert!(s0.starts_with("--set controller.neural.k2=6.0: key `controller.neural.k2`"), "{s0}");
-    assert!(s0.contains("K1 I") && s0.contains("set controller.neural.k2[0] (left_s0) to"), "{s0}");
+    assert!(
+        s0.starts_with("--set controller.neural.k2=6.0: key `controller.neural.k2`"),
+        "{s0}"
+    );
+    assert!(
+        s0.contains("K1 I") && s0.contains("set controller.neural.k2[0] (left_s0) to"),
+        "{s0}"
+    );
     // The suggested values pass.
     let suggested: Vec<f64> = w
         .iter()
-        .map(|l| l.rsplit(" to ").next().unwrap().split_whitespace().next().unwrap().parse().unwrap())
+        .map(|l| {
+            l.rsplit(" to ")
+                .next()
+                .unwrap()
+                .split_whitespace()
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap()
+        })
         .collect();
     let mut k2 = [6.0; 7];
     for (l, s) in w.iter().zip(&suggested) {
-        let j = ["left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2"]
-            .iter()
-            .position(|j| l.contains(&format!("({j})")))
-            .unwrap();
+        let j = [
+            "left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2",
+        ]
+        .iter()
+        .position(|j| l.contains(&format!("({j})")))
+        .unwrap();
         k2[j] = *s;
     }
     let mut fixed = ScenarioSource::load(&path).unwrap();
@@ -96,7 +122,11 @@ fn a_broken_health_rule_is_recorded_and_kept_apart_from_divergence() {
         &path,
         &dir,
         Some("nn_compensated"),
-        &["duration=2".into(), "evaluation_start=1".into(), "health.max_hand_error=1e-6".into()],
+        &[
+            "duration=2".into(),
+            "evaluation_start=1".into(),
+            "health.max_hand_error=1e-6".into(),
+        ],
         &RunOptions::default(),
         false,
         |_, _, _| {},
@@ -104,7 +134,12 @@ fn a_broken_health_rule_is_recorded_and_kept_apart_from_divergence() {
     )
     .unwrap();
     assert!(summary.failures.is_empty(), "{:?}", summary.failures);
-    assert_eq!(summary.health_failures.len(), 1, "{:?}", summary.health_failures);
+    assert_eq!(
+        summary.health_failures.len(),
+        1,
+        "{:?}",
+        summary.health_failures
+    );
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
     let h = &json["health"];

@@ -19,7 +19,11 @@ fn variant_warnings(folder: &RunFolder, v: &Variant, out: &mut Vec<String>) {
         .and_then(|h| h.iter().find(|(n, _)| n == name))
         .map(|(_, h)| h.verdicts.clone());
     let verdicts = recorded.unwrap_or_else(|| {
-        health::assess(&v.metrics, &folder.joints, &health::HealthSettings::default())
+        health::assess(
+            &v.metrics,
+            &folder.joints,
+            &health::HealthSettings::default(),
+        )
     });
     for verdict in verdicts {
         let what = match verdict.severity {

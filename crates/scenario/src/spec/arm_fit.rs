@@ -174,7 +174,12 @@ impl Scenario {
     /// admittance, for `model` moving through `poses` (the desired motion, sampled) with the
     /// plant's viscous friction `damping` per joint: one warning per joint and rule, at the
     /// key to change, with the suggested value (after [`Scenario::validate`]).
-    pub fn gain_warnings(&self, model: &Model, poses: &[Vec<f64>], damping: &[f64]) -> Vec<Invalid> {
+    pub fn gain_warnings(
+        &self,
+        model: &Model,
+        poses: &[Vec<f64>],
+        damping: &[f64],
+    ) -> Vec<Invalid> {
         use admittance_control::gains;
         use admittance_loop::{ControllerKind, ObserverKind};
         let n = model.nq();
@@ -199,7 +204,10 @@ impl Scenario {
                 ));
             }
         }
-        let estimating = !matches!(self.observer.kind, ObserverKind::None | ObserverKind::Oracle);
+        let estimating = !matches!(
+            self.observer.kind,
+            ObserverKind::None | ObserverKind::Oracle
+        );
         if let Some(a) = self.admittance.as_ref().filter(|a| a.enabled && estimating) {
             let c = &a.config;
             if let (Some(d), Some(s)) = (per_joint(&c.damping, n), per_joint(&c.stiffness, n)) {
