@@ -156,7 +156,8 @@ pub fn check_feedback(
         let low = k1j * inertia.max[j];
         let high = limits.max_k2(j, inertia.min[j]);
         let suggested = suggested_k2(k1j, inertia, limits, j);
-        if !(k2j > low) {
+        // A NaN gain is not above the bound either.
+        if k2j.partial_cmp(&low).is_none_or(|o| o.is_le()) {
             out.push(GainAdvice {
                 rule: "k2_adaptive_bound",
                 key: key.to_string(),
@@ -201,7 +202,7 @@ pub fn check_admittance(
     estimate_hz: f64,
 ) -> Vec<GainAdvice> {
     let mut out = Vec::new();
-    if !(estimate_hz > 0.0) {
+    if estimate_hz.is_nan() || estimate_hz <= 0.0 {
         return out;
     }
     let omega = BANDWIDTH_FRACTION * 2.0 * std::f64::consts::PI * estimate_hz;

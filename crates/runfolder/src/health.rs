@@ -107,7 +107,8 @@ impl HealthSettings {
     pub fn problems(&self) -> Vec<(&'static str, String)> {
         self.thresholds()
             .into_iter()
-            .filter(|(_, v)| !(*v >= 0.0))
+            // NaN is not >= 0 either.
+            .filter(|(_, v)| v.partial_cmp(&0.0).is_none_or(|o| o.is_lt()))
             .map(|(k, v)| {
                 (
                     k,
