@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use admittance_report::ReportError;
+use admittance_runfolder::{files, temp_sibling};
 use clap::Args;
 
 use crate::progress::{self, Spinner};
@@ -27,6 +28,15 @@ pub struct ReportArgs {
 
 pub fn report(args: &ReportArgs) -> Result<(), CliError> {
     let started = std::time::Instant::now();
+    crate::interrupt::set_message(&crate::interrupt::report_message(&args.dir));
+    for name in [
+        files::FIGURES,
+        files::REPORT_MD,
+        files::REPORT_HTML,
+        files::RECORDING,
+    ] {
+        crate::interrupt::remove_on_interrupt(temp_sibling(&args.dir.join(name)), None);
+    }
     let spinner = Spinner::start(
         progress::wanted(args.quiet),
         "writing figures, report and recording",

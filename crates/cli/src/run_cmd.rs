@@ -87,6 +87,10 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         ..admittance_report::Options::default()
     };
     crate::interrupt::set_message(&crate::interrupt::run_message(&args.out));
+    crate::interrupt::remove_on_interrupt(
+        crate::interrupt::run_partial(&args.out),
+        Some(crate::interrupt::PARTIAL_MARKER),
+    );
     let result = run_scenario_variants(
         &args.scenario,
         &args.out,

@@ -46,7 +46,7 @@ pub struct TrainArgs {
     #[command(flatten)]
     chain: crate::dynamics_cmd::ChainArgs,
     /// Enhancement (Gaussian) nodes L (at most the training rows).
-    #[arg(long, default_value_t = 1000, value_parser = positive_count, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = admittance_learning::broad::DEFAULT_NODES, value_parser = positive_count, allow_negative_numbers = true)]
     nodes: usize,
     /// Add friction-shaped inputs tanh(qdot / v) (docs/method.md section 7).
     #[arg(long)]
@@ -187,11 +187,7 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     };
     let mut config = BroadConfig {
         nodes: args.nodes,
-        friction: if args.friction_features {
-            FrictionFeatures::joint_velocities(n)
-        } else {
-            FrictionFeatures::none()
-        },
+        friction: FrictionFeatures::for_observer(n, args.friction_features, None),
         cv_folds: args.folds,
         budget: args.budget.budget(),
         ..BroadConfig::default()

@@ -361,7 +361,7 @@ fn report_on_huge_and_non_finite_values_finishes() {
     .unwrap();
     std::fs::write(
         dir.join("scenario.toml"),
-        "name = \"deadzone\"\nevaluation_start = 5.0\n[arm]\nurdf = \"nowhere.urdf\"\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 1e308\n",
+        "name = \"deadzone\"\nevaluation_start = 5.0\n[arm]\nurdf = \"nowhere.urdf\"\n[controller]\nkind = \"neural\"\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 1e308\n[variants.nn_uncompensated]\ncontroller.neural.deadzone_compensation = false\n",
     )
     .unwrap();
     let (code, err) = admittance_within(&["report", dir.to_str().unwrap(), "--quiet"], 120)
@@ -379,6 +379,110 @@ fn report_on_huge_and_non_finite_values_finishes() {
     ] {
         assert!(dir.join("figures").join(f).is_file(), "{f}");
     }
+}
+
+/// Issue 25: the report is chosen by what the scenario contains, not by its name. The
+/// committed Panda deadzone scenario, copied under another file name and scenario name,
+/// gets experiment A's report with the figures of its deadzone joint, and its run folder
+/// records the deadzone the plant applied (settings.json).
+#[test]
+fn a_renamed_panda_deadzone_scenario_gets_the_deadzone_report() {
+    let tmp = tempdir("renamed");
+    let dir = tmp.path();
+    let text = std::fs::read_to_string(root().join("scenarios/panda_deadzone.toml"))
+        .unwrap()
+        .replace("name = \"panda_deadzone\"", "name = \"my_arm_trial\"")
+        .replace(
+            "urdf = \"../models/franka_panda.urdf\"",
+            &format!(
+                "urdf = {:?}",
+                root()
+                    .join("models/franka_panda.urdf")
+                    .canonicalize()
+                    .unwrap()
+            ),
+        );
+    let scenario = dir.join("trial.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.join("run");
+    let (code, _, err) = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--variant",
+        "nn_compensated",
+        "--variant",
+        "nn_uncompensated",
+        "--variant",
+        "pd",
+        "--set",
+        "duration=1",
+        "--set",
+        "evaluation_start=0.5",
+        "--no-recording",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.starts_with("# Experiment A: deadzone compensation (scenario `my_arm_trial`)"),
+        "{md}"
+    );
+    assert!(
+        md.contains("panda_joint1 tracking RMSE, compensated / PD"),
+        "{md}"
+    );
+    assert!(
+        !md.contains("settings.json"),
+        "a new folder has its settings: {md}"
+    );
+    for f in [
+        "fig08_end_effector_error",
+        "fig11_s0_errors",
+        "fig12_s0_control_inputs",
+    ] {
+        assert!(
+            out.join("figures").join(format!("{f}.png")).is_file(),
+            "{f}"
+        );
+    }
+    let svg = std::fs::read_to_string(out.join("figures/fig12_s0_control_inputs.svg")).unwrap();
+    assert!(
+        svg.contains("joint panda_joint1"),
+        "Fig 12 shows the deadzone joint"
+    );
+    let settings: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("settings.json")).unwrap()).unwrap();
+    assert_eq!(settings["format"], "admittance-run-settings");
+    assert_eq!(
+        settings["variants"][1]["deadzones"][0],
+        serde_json::json!({"joint": "panda_joint1", "d_left": -0.49, "d_right": 0.49, "slope_left": 1.0, "slope_right": 1.0})
+    );
+    assert_eq!(settings["variants"][1]["deadzone_compensation"], false);
+    assert_eq!(settings["variants"][2]["controller"], "pd");
+
+    // The same folder without settings.json (written by an earlier build): still the
+    // deadzone report, read from scenario.toml, and the report says so.
+    std::fs::remove_file(out.join("settings.json")).unwrap();
+    let (code, _, err) =
+        admittance(&["report", out.to_str().unwrap(), "--no-recording", "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.starts_with("# Experiment A"), "{md}");
+    assert!(md.contains("has no `settings.json`"), "{md}");
+    // A malformed one is refused with the file named (exit 3), never a panic.
+    std::fs::write(
+        out.join("settings.json"),
+        "{\"format\": \"admittance-run-settings\", \"format_version\": 7}",
+    )
+    .unwrap();
+    let (code, _, err) = admittance(&["report", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("settings.json") && err.contains("format_version 7"),
+        "{err}"
+    );
 }
 
 #[test]

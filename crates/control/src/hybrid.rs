@@ -148,6 +148,9 @@ impl Observer for HybridObserver {
         };
         self.momentum.update(&corrected, dt, estimate)
     }
+    fn coverage(&self) -> Option<f64> {
+        Some(self.coverage)
+    }
     fn reset(&mut self) {
         self.momentum.reset();
         self.delta_hat.fill(0.0);

@@ -33,6 +33,11 @@ pub trait Observer {
     fn update(&mut self, input: &ObserverInput, dt: f64, estimate: &mut [f64]) -> StepStatus;
     /// Back to the state just after construction.
     fn reset(&mut self);
+    /// How well the last input lies inside the data a learned part was trained on, in
+    /// [0, 1] (1 inside; docs/method.md section 8); `None` for an observer without one.
+    fn coverage(&self) -> Option<f64> {
+        None
+    }
 }
 
 fn check_lengths(n: usize, estimate: &[f64]) -> Result<(), Fault> {

@@ -83,17 +83,20 @@ mod greville;
 mod growth;
 mod io;
 mod kernels;
+mod limits;
 mod model;
 mod provenance;
+mod stamp;
 mod solve;
 
-pub use budget::{
-    check_budget, format_bytes, Budget, Estimate, FitSize, DEFAULT_MAX_FLOP,
-    DEFAULT_MAX_MEMORY_BYTES,
+pub use budget::{check_budget, Estimate, FitSize};
+pub use config::{
+    BroadConfig, FrictionFeatures, GramStrategy, WidthRule, DEFAULT_FRICTION_SCALES,
+    DEFAULT_NODES,
 };
-pub use config::{BroadConfig, FrictionFeatures, GramStrategy, WidthRule};
 pub use coverage::COVERAGE_QUANTILE;
 pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
+pub use limits::{format_bytes, Budget, DEFAULT_MAX_FLOP, DEFAULT_MAX_MEMORY_BYTES};
 pub use destination::check_model_destination;
 pub use error::BroadError;
 pub use features::NodeSet;

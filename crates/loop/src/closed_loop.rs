@@ -187,6 +187,16 @@ impl ClosedLoop {
         &self.estimate
     }
 
+    /// How well the last step's observer input lies inside its network's training data,
+    /// in [0, 1] (the hybrid observer fades its correction by it; docs/method.md section
+    /// 8); `None` when the estimate has no learned part that reports one.
+    pub fn estimate_coverage(&self) -> Option<f64> {
+        match &self.estimate_source {
+            EstimateSource::Observer(stage) => stage.coverage(),
+            _ => None,
+        }
+    }
+
     /// The compliant reference `q_r` of the last step.
     pub fn q_r(&self) -> &[f64] {
         &self.q_r

@@ -159,7 +159,8 @@ pub struct ObserverConfig<Training = NoTraining> {
     pub nominal_inertia_scale: f64,
     /// An identification file of this arm (`admittance identify`, docs/outputs.md): the
     /// momentum observer runs on the identified model with its joint terms (docs/method.md
-    /// section 8) instead of the URDF. Default: absent. Used by `momentum`; with it
+    /// section 8) instead of the URDF. Default: absent. Used by `momentum` and `hybrid`
+    /// (whose network must have learned this identification's residual); with it
     /// `nominal_inertia_scale` must stay 1. A relative path is taken from the scenario
     /// file's folder (by the scenario runner) or the working directory.
     #[serde(default)]

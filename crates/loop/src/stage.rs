@@ -117,4 +117,9 @@ impl ObserverStage {
             .copy_from_slice(&m.tau_filtered);
         ok
     }
+
+    /// The observer's coverage of its last input ([`Observer::coverage`]).
+    pub(crate) fn coverage(&self) -> Option<f64> {
+        self.observer.coverage()
+    }
 }

@@ -61,14 +61,14 @@ impl<Training> LoopConfig<Training> {
             ));
         }
         if o.identification.is_some() {
-            if o.kind != ObserverKind::Momentum {
-                out.push(
-                    LoopError::invalid(
-                        "observer.identification",
-                        format!("is used by kind = \"momentum\" only, not {:?}", o.kind),
-                    )
-                    .hint("a hybrid's network on an identification is trained with `admittance train --nominal`; run it from Python or the CLI"),
-                );
+            if !matches!(o.kind, ObserverKind::Momentum | ObserverKind::Hybrid) {
+                out.push(LoopError::invalid(
+                    "observer.identification",
+                    format!(
+                        "is used by kind = \"momentum\" and \"hybrid\" only, not {:?}",
+                        o.kind
+                    ),
+                ));
             }
             if o.nominal_inertia_scale != 1.0 {
                 out.push(LoopError::invalid(

@@ -82,3 +82,31 @@ def test_a_wall_is_real_contact(tmp_path):
     tau = data[:, cols.index("tau_ext.panda_joint1")]
     # Joint 1 swings the hand into the box: contact torque on joint 1, resisting the motion.
     assert np.max(np.abs(tau)) > 0.5
+
+
+def test_free_motion_is_recorded_on_the_excitation():
+    """The training recording tracks `adm.excitation` (issue 22), with a seed drawn from the
+    recording's generator; `training_motion="multisine"` keeps the hand-made multi-sine."""
+    import admittance as adm
+    from admittance.mujoco._cosim import home_pose, pd_gains, record_free_motion
+    from admittance.mujoco._plant import MujocoArm
+
+    m = adm.Model.from_urdf(PANDA, tip="panda_hand_tcp")
+    cfg = short("unused")
+    arm = MujocoArm(PANDA.read_text(), m.joint_names, "panda_hand_tcp", m.effort_limit, cfg.dt, 1.0)
+    q0 = home_pose(m)
+    pd = pd_gains(m, q0)
+    data = record_free_motion(arm, m, q0, pd, cfg, np.random.default_rng(5), 3.0)
+    seed = int(np.random.default_rng(5).integers(1, 2**31 - 1))
+    e = adm.excitation(m, 3.0, seed=seed, rate_hz=1000.0)
+    assert data["q"].shape == (3000, m.n) and np.all(np.isfinite(data["tau"]))
+    late = slice(1000, 3000)
+    # The stiff joints follow it closely (the wrist's PD is soft: pd_gains ignores armature).
+    assert np.max(np.abs(data["q"][late, :4] - e["q"][late, :4])) < 0.1
+    assert np.ptp(e["q"][:, :4], axis=0).min() > 0.2  # and it does move
+    cfg.training_motion = "multisine"
+    other = record_free_motion(arm, m, q0, pd, cfg, np.random.default_rng(5), 1.0)
+    assert np.max(np.abs(other["q"][500:] - e["q"][500:1000])) > 0.05
+    cfg.training_motion = "sines"
+    with pytest.raises(ValueError, match="training_motion"):
+        record_free_motion(arm, m, q0, pd, cfg, np.random.default_rng(5), 1.0)

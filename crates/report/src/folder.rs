@@ -45,6 +45,10 @@ pub struct RunFolder {
     pub health: Option<Vec<(String, admittance_runfolder::health::VariantHealth)>>,
     /// The scenario file as run (`scenario.toml`), when present and readable.
     pub scenario_toml: Option<toml::Table>,
+    /// Every variant's settings as the run applied them (`settings.json`); `None` in a
+    /// folder written before that file existed (the settings are then read from
+    /// `scenario.toml`, and the report says so).
+    pub settings: Option<admittance_runfolder::settings::RunSettings>,
     /// Free-motion recordings (`free_motion.csv`, `free_motion_VARIANT.csv`): file name
     /// and the columns `t` and `q.*`.
     pub free_motion: Vec<(String, Table)>,
@@ -201,6 +205,8 @@ impl RunFolder {
                 table,
             });
         }
+        let settings = admittance_runfolder::settings::RunSettings::read(dir)
+            .map_err(|e| input(&dir.join(files::SETTINGS), e))?;
         let free_motion = load_free_motion(dir)?;
         let mut node_weights = Vec::new();
         let mut observer_validation = Vec::new();
@@ -226,6 +232,7 @@ impl RunFolder {
             warnings: string_list(summary.get(summary::KEY_WARNINGS)).unwrap_or_default(),
             health: admittance_runfolder::health::read(&summary),
             scenario_toml,
+            settings,
             free_motion,
             node_weights,
             observer_validation,

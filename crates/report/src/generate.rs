@@ -117,6 +117,7 @@ fn write_figures(
             }
         }
         let old = dir.join(format!(".{}.old-{}", files::FIGURES, std::process::id()));
+        let _commit = admittance_runfolder::commit_guard();
         if fig_dir.exists() {
             std::fs::rename(&fig_dir, &old).map_err(io(&fig_dir))?;
         }

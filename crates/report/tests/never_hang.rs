@@ -198,10 +198,16 @@ fn write_folder(dir: &Path, scenario: &str, variants: &[&str], toml: &str, damag
 
 const DEADZONE_TOML: &str = "name = \"deadzone\"\nduration = 40.0\nevaluation_start = 20.0\n\
 [arm]\nurdf = \"no-such-arm.urdf\"\n\
-[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n";
+[controller]\nkind = \"neural\"\n\
+[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n\
+[variants.nn_uncompensated]\ncontroller.neural.deadzone_compensation = false\n\
+[variants.nn_compensated_wide]\nplant.deadzones = [{ joint = \"left_s0\", d_left = -5.0, d_right = 5.0 }]\n\
+[variants.nn_uncompensated_wide]\ncontroller.neural.deadzone_compensation = false\n\
+plant.deadzones = [{ joint = \"left_s0\", d_left = -5.0, d_right = 5.0 }]\n";
 const ADMITTANCE_TOML: &str = "name = \"admittance\"\nduration = 40.0\nevaluation_start = 2.0\n\
 [[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 12.0\nt_end = 30.0\n\
-[admittance.saturation]\ncentre = 0.0\nhalf_range = [1.1, inf]\n";
+[admittance]\ndamping = 3\nstiffness = 5\n[observer]\nkind = \"learned\"\n\
+[admittance.saturation]\nrho = 0.95\ncentre = 0.0\nhalf_range = [1.1, inf]\n";
 const DYNAMIC_TOML: &str =
     "name = \"dynamic_nodes\"\nduration = 40.0\n[dynamic_nodes]\napproximation_window = 5.0\n";
 
@@ -227,7 +233,7 @@ fn scenarios() -> Vec<(&'static str, Vec<&'static str>, String)> {
         (
             "free_motion",
             vec!["base"],
-            "name = \"free_motion\"\n".to_string(),
+            "name = \"free_motion\"\n[record]\nfree_motion_csv = true\n".to_string(),
         ),
         (
             "something_else",

@@ -1,5 +1,18 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+static COMMIT: Mutex<()> = Mutex::new(());
+
+/// Held while a finished output replaces an older one (a run folder or `figures/` renamed
+/// aside, the new one renamed into place), so that whoever cleans up after an interrupt
+/// (the command line's Ctrl-C handler, which takes it too) never removes a temporary
+/// folder between those two renames, when it is the only complete copy.
+pub fn commit_guard() -> MutexGuard<'static, ()> {
+    COMMIT
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// A hidden temporary sibling of `path` for this process: `.NAME.tmp-PID`.
 pub fn temp_sibling(path: &Path) -> PathBuf {

@@ -43,6 +43,9 @@ pub const F_TRUE: &str = "f";
 pub const F_ESTIMATE: &str = "f_hat";
 /// With the neural controller: node count of the f network, one column.
 pub const NODES_F: &str = "nodes.f";
+/// How well the observer's input lies inside its network's training data, in [0, 1]
+/// (hybrid observers; docs/method.md section 8).
+pub const ESTIMATE_COVERAGE: &str = "estimate_coverage";
 /// Prefix of the node-count columns, `nodes.NETWORK` (e.g. [`NODES_F`]).
 pub const NODES: &str = "nodes";
 

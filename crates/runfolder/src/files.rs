@@ -5,6 +5,8 @@
 pub const SUMMARY: &str = "summary.json";
 /// The scenario as run: the file with every `--set` override and `--seed` folded in.
 pub const SCENARIO: &str = "scenario.toml";
+/// Every variant's settings as the run applied them ([`crate::settings`]).
+pub const SETTINGS: &str = "settings.json";
 /// The report as Markdown.
 pub const REPORT_MD: &str = "report.md";
 /// The report as one self-contained HTML page.

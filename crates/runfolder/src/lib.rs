@@ -10,6 +10,8 @@
 //!   replaced by `run --out`);
 //! * [`health`]: the rules a run is judged by, their thresholds and the verdicts recorded in
 //!   `summary.json`;
+//! * [`settings`]: `settings.json`, every variant's settings as the run applied them (the
+//!   deadzone, environment windows, evaluation window, saturation bounds, kinds);
 //! * [`write_atomic`]: files are written through a temporary sibling and a rename.
 //!
 //! docs/outputs.md describes the same contract for users.
@@ -20,8 +22,9 @@ pub mod columns;
 pub mod files;
 pub mod health;
 pub mod metrics;
+pub mod settings;
 pub mod summary;
 
 mod atomic;
 
-pub use atomic::{temp_sibling, write_atomic};
+pub use atomic::{commit_guard, temp_sibling, write_atomic};

@@ -109,6 +109,10 @@ metrics! {
     OBSERVER_LAMBDA = "observer_lambda", "", false, Run, "chosen ridge parameter";
     OBSERVER_MODEL_CACHED = "observer_model_cached", "", false, Run, "whether the network came from the cache";
     TRAINING_SAMPLES = "training_samples", "", false, Run, "training rows";
+    ESTIMATE_COVERAGE_MIN = "estimate_coverage_min", "", false, Evaluation, "lowest coverage of the hybrid observer's input by its network's training data (1 inside, 0 far outside)";
+    ESTIMATE_COVERAGE_MEAN = "estimate_coverage_mean", "", false, Evaluation, "mean coverage of the hybrid observer's input by its network's training data";
+    IDENTIFICATION_EXPECTED_FALSE_TORQUE_RMS = "identification_expected_false_torque_rms", "N m", true, Validation, "the identified model's RMS false torque on the validation data, free motion it was not fitted on";
+    IDENTIFICATION_CACHED = "identification_cached", "", false, Run, "whether the identification came from the cache";
 }
 
 /// The entry of a metric, by name.

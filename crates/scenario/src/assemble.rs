@@ -12,12 +12,14 @@ use admittance_sim::{Plant, Sensors, SimError};
 
 use crate::context::Ctx;
 use crate::error::ScenarioError;
-use crate::metrics::ObserverTrainingMetrics;
+use crate::metrics::{IdentificationMetrics, ObserverTrainingMetrics};
 use crate::progress::RunOptions;
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
 use crate::spec::Scenario;
-use crate::training::{observer_network, SimulateData};
+use crate::training::{
+    identified_nominal, observer_network, IdentifiedNominal, Nominal, SimulateData,
+};
 use crate::trajectory::Trajectory;
 
 /// The parts of one variant's run.
@@ -33,6 +35,7 @@ pub(crate) struct Assembly {
     pub oracle_admittance: Option<Compliance>,
     pub observer_training: Option<ObserverTrainingMetrics>,
     pub observer_validation: Option<TimeSeries>,
+    pub identification: Option<IdentificationMetrics>,
     /// What the URDF loader accepted with a warning (`file:line: element: problem`).
     pub arm_warnings: Vec<String>,
 }
@@ -65,11 +68,18 @@ pub(crate) fn assemble(
     }
     crate::budget::check_run(&ctx, &scenario, joints.len(), &options.limits)?;
     let n = model.nq();
-    let trajectory = Trajectory::new(
-        &scenario.trajectory,
-        &joints,
-        &crate::spec::mid_range(&model),
-    );
+    let trajectory = match &scenario.trajectory.excitation {
+        Some(settings) => {
+            let designed = admittance_dynamics::excitation(&model, settings)
+                .map_err(|e| ctx.err("trajectory.excitation", e.to_string(), None))?;
+            Trajectory::excitation(designed.base_frequency, designed.series)
+        }
+        None => Trajectory::new(
+            &scenario.trajectory,
+            &joints,
+            &crate::spec::mid_range(&model),
+        ),
+    };
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     trajectory.eval(0.0, &mut q_d, &mut qd_d, &mut qdd_d);
 
@@ -85,10 +95,14 @@ pub(crate) fn assemble(
     let gain_warnings = gain_warning_lines(&ctx, &scenario, &model, &trajectory);
     let sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
         .map_err(sim_err)?;
-    let loop_config = scenario.loop_config_for(path);
+    let mut loop_config = scenario.loop_config_for(path);
     let oracle_admittance = loop_config
         .compliance(&model)
         .map_err(|e| loop_err(&ctx, e))?;
+    let identified = identified_nominal_of(&ctx, &scenario, &model, path, options, simulate)?;
+    if let Some(nominal) = &identified {
+        loop_config.observer.identification = Some(nominal.path.clone());
+    }
     let mut observer_training = None;
     let mut observer_validation = None;
     let trained = trained_network(
@@ -98,6 +112,7 @@ pub(crate) fn assemble(
         path,
         options,
         simulate,
+        identified.as_ref(),
         &mut observer_training,
         &mut observer_validation,
     )?;
@@ -113,6 +128,14 @@ pub(crate) fn assemble(
         oracle_admittance,
         observer_training,
         observer_validation,
+        identification: identified.map(|i| IdentificationMetrics {
+            identification_expected_false_torque_rms: i
+                .identification
+                .summary
+                .expected_false_torque_rms
+                .clone(),
+            identification_cached: i.cached,
+        }),
         arm_warnings: model
             .warnings()
             .iter()
@@ -120,6 +143,40 @@ pub(crate) fn assemble(
             .chain(gain_warnings)
             .collect(),
     })
+}
+
+/// The identification the momentum and hybrid observers run on: fitted on the training
+/// data (`[observer.training] identify = true`), or the file `observer.identification`
+/// names; `None` when they run on the URDF or the observer is another kind.
+fn identified_nominal_of(
+    ctx: &Ctx<'_>,
+    scenario: &Scenario,
+    model: &Model,
+    path: &Path,
+    options: &RunOptions,
+    simulate: SimulateData<'_>,
+) -> Result<Option<IdentifiedNominal>, ScenarioError> {
+    let spec = &scenario.observer;
+    if !matches!(spec.kind, ObserverKind::Momentum | ObserverKind::Hybrid) {
+        return Ok(None);
+    }
+    if spec.training.as_ref().is_some_and(|t| t.identify) {
+        return identified_nominal(ctx, scenario, path, model, options, simulate).map(Some);
+    }
+    let Some(file) = &scenario.loop_config_for(path).observer.identification else {
+        return Ok(None);
+    };
+    let key_err = |m: String| ctx.err("observer.identification", m, None);
+    let bytes = std::fs::read(file)
+        .map_err(|e| key_err(format!("cannot read {}: {e}", file.display())))?;
+    let identification = admittance_dynamics::Identification::load(file, model)
+        .map_err(|e| key_err(e.to_string()))?;
+    Ok(Some(IdentifiedNominal {
+        path: file.clone(),
+        identification,
+        checksum: admittance_learning::broad::fnv1a64(&bytes),
+        cached: true,
+    }))
 }
 
 /// The gain rules' warnings of a resolved, valid scenario (`Scenario::gain_warnings`) over
@@ -203,6 +260,7 @@ fn trained_network(
     path: &Path,
     options: &RunOptions,
     simulate: SimulateData<'_>,
+    identified: Option<&IdentifiedNominal>,
     training: &mut Option<ObserverTrainingMetrics>,
     validation: &mut Option<TimeSeries>,
 ) -> Result<Option<BroadModel>, ScenarioError> {
@@ -210,23 +268,20 @@ fn trained_network(
     if !spec.kind.is_learned() {
         return Ok(None);
     }
-    let nominal_model = match spec.kind {
-        ObserverKind::Hybrid => Some(
+    let scaled_urdf = match (spec.kind, identified) {
+        (ObserverKind::Hybrid, None) => Some(
             model
                 .with_scaled_inertias(spec.nominal_inertia_scale)
                 .map_err(|e| ctx.err("observer.nominal_inertia_scale", e.to_string(), None))?,
         ),
         _ => None,
     };
-    let net = observer_network(
-        ctx,
-        scenario,
-        path,
-        model,
-        nominal_model.as_ref(),
-        options,
-        simulate,
-    )?;
+    let nominal = match (spec.kind, identified, &scaled_urdf) {
+        (ObserverKind::Hybrid, Some(i), _) => Some(Nominal::Identified(i)),
+        (ObserverKind::Hybrid, None, Some(m)) => Some(Nominal::Urdf(m)),
+        _ => None,
+    };
+    let net = observer_network(ctx, scenario, path, model, nominal, options, simulate)?;
     *training = Some(ObserverTrainingMetrics {
         train_seconds: net.train_seconds,
         observer_nodes: net.model.n_nodes(),

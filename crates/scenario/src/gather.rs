@@ -31,6 +31,8 @@ pub(crate) struct Gather {
     ee_errors: Vec<f64>,
     deadzone_steps: Vec<usize>,
     window_steps: usize,
+    /// Minimum and sum of the observer's coverage over the window.
+    coverage: Option<(f64, f64)>,
     pub health: Health,
     pub hand: Option<HandStats>,
 }
@@ -45,6 +47,7 @@ pub(crate) struct WindowSample<'a> {
     pub q_r_oracle: Option<&'a [f64]>,
     pub ee_error: f64,
     pub hand: Option<(&'a [f64; 3], &'a [f64])>,
+    pub coverage: Option<f64>,
 }
 
 impl Gather {
@@ -74,6 +77,7 @@ impl Gather {
             ee_errors: Vec::new(),
             deadzone_steps: vec![0; n],
             window_steps: 0,
+            coverage: None,
             health: Health::new(model, joints, effort),
             hand: with_hand.then(HandStats::default),
         }
@@ -149,6 +153,11 @@ impl Gather {
             h.add(f, f_hat);
         }
         self.window_steps += 1;
+        if let Some(c) = s.coverage {
+            let (min, sum) = self.coverage.get_or_insert((f64::INFINITY, 0.0));
+            *min = min.min(c);
+            *sum += c;
+        }
         for (c, dz) in self.deadzone_steps.iter_mut().zip(&s.record.in_deadzone) {
             *c += *dz as usize;
         }
@@ -183,6 +192,10 @@ impl Gather {
             steps: self.steps,
             external_torque_rmse: self.estimate_error.rms(),
             observer_faults: self.observer_faults,
+            estimate_coverage_min: self.coverage.map(|(min, _)| min),
+            estimate_coverage_mean: self
+                .coverage
+                .map(|(_, sum)| sum / self.window_steps.max(1) as f64),
             ..VariantMetrics::default()
         };
         self.observer.finish(&mut metrics, with_oracle_reference);

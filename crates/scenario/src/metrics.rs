@@ -60,9 +60,19 @@ pub struct VariantMetrics {
     pub admittance_error_rms: Option<Vec<f64>>,
     /// Observer updates that faulted.
     pub observer_faults: usize,
+    /// Lowest coverage of the observer's input by its network's training data over the
+    /// evaluation window (hybrid; 1 inside the data, 0 far outside).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_coverage_min: Option<f64>,
+    /// Mean coverage over the evaluation window.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_coverage_mean: Option<f64>,
     /// How a learned observer's network was obtained.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub observer_training: Option<ObserverTrainingMetrics>,
+    /// The identification the momentum or hybrid observer runs on.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub identification: Option<IdentificationMetrics>,
     /// Final node count per network of the neural controller.
     pub nodes: BTreeMap<String, usize>,
     /// Final weight norm per network of the neural controller.
@@ -109,6 +119,15 @@ pub struct ObserverTrainingMetrics {
     pub training_samples: usize,
     /// Chosen ridge parameter.
     pub observer_lambda: f64,
+}
+
+/// The identified nominal model of a momentum or hybrid observer (docs/outputs.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct IdentificationMetrics {
+    /// Per joint: the identified model's RMS false torque on its validation data (N m).
+    pub identification_expected_false_torque_rms: Vec<f64>,
+    /// Whether it came from the cache (or a given file).
+    pub identification_cached: bool,
 }
 
 /// Experiment C (dynamic nodes).
@@ -278,6 +297,8 @@ mod tests {
             diverged_at: Some(1.0),
             external_torque_nrmse: Some(0.5),
             admittance_error_rms: Some(vec![0.0]),
+            estimate_coverage_min: Some(1.0),
+            estimate_coverage_mean: Some(1.0),
             observer_training: Some(ObserverTrainingMetrics {
                 train_seconds: 1.0,
                 observer_nodes: 1,
@@ -285,6 +306,10 @@ mod tests {
                 observer_model_cached: false,
                 training_samples: 1,
                 observer_lambda: 1e-3,
+            }),
+            identification: Some(IdentificationMetrics {
+                identification_expected_false_torque_rms: vec![0.1],
+                identification_cached: false,
             }),
             weight_norm_final: Some(BTreeMap::new()),
             dynamic_nodes: Some(DynamicNodeMetrics {

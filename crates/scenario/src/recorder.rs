@@ -33,6 +33,8 @@ pub(crate) struct Row<'a> {
     pub nodes: Option<usize>,
     /// `f_hand`, `f_hand_hat`, `x_hand`, `x_hand_r`, `x_hand_d` (task-space runs).
     pub hand: Option<[&'a [f64]; 5]>,
+    /// The observer's coverage of its input (with [`Recorder::record_coverage`]).
+    pub coverage: Option<f64>,
 }
 
 impl Recorder {
@@ -83,6 +85,14 @@ impl Recorder {
             .copy_from_slice(&m.tau_filtered);
     }
 
+    /// Adds the column `estimate_coverage` (an observer with a learned part that reports
+    /// where its training data end; docs/outputs.md) as the last column.
+    pub fn record_coverage(&mut self) {
+        self.series
+            .columns
+            .push(admittance_runfolder::columns::ESTIMATE_COVERAGE.into());
+    }
+
     /// Whether step `k` writes a row.
     pub fn wants(&self, k: usize) -> bool {
         k.is_multiple_of(self.decimation)
@@ -117,6 +127,9 @@ impl Recorder {
             for v in hand {
                 row.extend_from_slice(v);
             }
+        }
+        if row.len() < self.series.columns.len() {
+            row.push(r.coverage.unwrap_or(f64::NAN));
         }
         self.series.rows.push(row);
     }

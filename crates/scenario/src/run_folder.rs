@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use admittance_runfolder::files;
 use admittance_runfolder::health::{self, Severity, VariantHealth};
+use admittance_runfolder::settings::RunSettings;
 use admittance_runfolder::summary::{self, OutTarget};
 use serde_json::{json, Value};
 
@@ -243,13 +244,17 @@ pub fn run_scenario_variants(
         progress(v.as_deref().unwrap_or("base"), k, selected.len());
         runs.push(run_variant(&source, path, v.as_deref(), options)?);
     }
-    let evaluation_start = source
-        .resolve::<Scenario>(selected[0].as_deref())?
-        .evaluation_start;
-    crate::hand::across_variants(&mut runs, evaluation_start);
+    let first = source.resolve::<Scenario>(selected[0].as_deref())?;
+    let evaluation_start = first.evaluation_start;
+    crate::hand_paths::across_variants(&mut runs, evaluation_start);
     let judged: Vec<(String, VariantHealth)> =
         runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
     let summary = summary_json(&scenario_name, &runs, &judged);
+    let settings = RunSettings::new(
+        first.duration,
+        evaluation_start,
+        runs.iter().map(|r| r.settings.clone()).collect(),
+    );
     write_folder(out_dir, path, force, |partial| {
         for run in &runs {
             write_series_csv(&partial.join(files::series(&run.name)), &run.series)?;
@@ -266,6 +271,8 @@ pub fn run_scenario_variants(
         let scenario_copy = partial.join(files::SCENARIO);
         std::fs::write(&scenario_copy, source.text_as_run(options.seed))
             .map_err(io_err(&scenario_copy))?;
+        let settings_path = partial.join(files::SETTINGS);
+        std::fs::write(&settings_path, settings.to_text()).map_err(io_err(&settings_path))?;
         // summary.json last: its presence marks a complete folder.
         let summary_path = partial.join(files::SUMMARY);
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
@@ -394,6 +401,9 @@ fn write_folder(
         let _ = std::fs::remove_dir_all(&partial);
         return Err(e);
     }
+    // From here to the end the partial folder may be the only complete copy: an interrupt's
+    // clean-up waits (admittance_runfolder::commit_guard).
+    let _commit = admittance_runfolder::commit_guard();
     let _ = std::fs::remove_file(&marker);
     let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
     let replaced = std::fs::symlink_metadata(out_dir).is_ok();

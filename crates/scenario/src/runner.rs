@@ -47,6 +47,8 @@ pub struct VariantRun {
     pub arm_warnings: Vec<String>,
     /// The thresholds of the health rules for this variant (`[health]`).
     pub health_settings: admittance_runfolder::health::HealthSettings,
+    /// The variant's settings as the run applied them (`settings.json`).
+    pub settings: admittance_runfolder::settings::VariantSettings,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -81,6 +83,7 @@ fn simulate_variant(
         mut oracle_admittance,
         observer_training,
         observer_validation,
+        identification,
         arm_warnings,
     } = parts;
     let n = joints.len();
@@ -104,11 +107,16 @@ fn simulate_variant(
         closed_loop.neural().is_some(),
         with_hand,
     );
+    if closed_loop.estimate_coverage().is_some() {
+        recorder.record_coverage();
+    }
     let mut gather = Gather::new(&model, &joints, &effort, steps, with_hand);
     let mut kinematics = HandKinematics::new(&model);
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
     let variant_name = ctx.variant.unwrap_or("base");
+    let settings =
+        crate::settings::variant_settings(variant_name, &scenario, &joints, &plant, &closed_loop);
     let progress_stride = (steps / 100).max(1);
 
     for k in 0..steps {
@@ -178,6 +186,7 @@ fn simulate_variant(
                 q_r_oracle: oracle_admittance.as_ref().map(|a| a.q_r()),
                 ee_error,
                 hand: hand_estimate.map(|f_hat| (&hand_force, f_hat)),
+                coverage: closed_loop.estimate_coverage(),
             });
         }
         if recorder.wants(k) {
@@ -206,6 +215,7 @@ fn simulate_variant(
                 nodes: closed_loop.neural().map(|nn| nn.node_count(NetworkId::F)),
                 hand: hand_estimate
                     .map(|f_hat| [&hand_force[..], f_hat, &p_hand[..], &p_ref[..], &p_d[..]]),
+                coverage: closed_loop.estimate_coverage(),
             });
         }
     }
@@ -223,6 +233,8 @@ fn simulate_variant(
     )?;
     run.arm_warnings = arm_warnings;
     run.health_settings = scenario.health.clone();
+    run.metrics.identification = identification;
+    run.settings = settings;
     Ok(run)
 }
 
@@ -268,5 +280,6 @@ fn finish(
         divergence: health.divergence,
         arm_warnings: Vec::new(),
         health_settings: Default::default(),
+        settings: Default::default(),
     })
 }

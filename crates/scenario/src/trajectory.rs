@@ -1,5 +1,7 @@
 //! The desired joint trajectory `q_d(t)` (`[trajectory]`): a pose (the offset, or a quintic
-//! blend between waypoints) plus sines.
+//! blend between waypoints) plus sines, or an excitation's Fourier series.
+
+use admittance_dynamics::FourierSeries;
 
 use crate::spec::TrajectorySpec;
 
@@ -11,6 +13,9 @@ pub struct Trajectory {
     waypoints: Vec<Vec<f64>>,
     /// (joint index, amplitude, angular frequency, phase).
     sines: Vec<(usize, f64, f64, f64)>,
+    /// An excitation: base frequency (rad/s) and one series per joint, added to the rest
+    /// (the offset is then zero).
+    fourier: Option<(f64, Vec<FourierSeries>)>,
 }
 
 /// The quintic blend `s(u) = 10u^3 - 15u^4 + 6u^5` and its first two derivatives in `u`.
@@ -49,6 +54,18 @@ impl Trajectory {
                 .unwrap_or_else(|| default_offset.to_vec()),
             waypoints: spec.waypoints.clone(),
             sines,
+            fourier: None,
+        }
+    }
+
+    /// The excitation's series (base frequency `w` in rad/s, one series per joint) as the
+    /// whole trajectory: `q_d(t) = sum of the series`, periodic.
+    pub fn excitation(w: f64, series: Vec<FourierSeries>) -> Self {
+        Self {
+            offset: vec![0.0; series.len()],
+            waypoints: Vec::new(),
+            sines: Vec::new(),
+            fourier: Some((w, series)),
         }
     }
 
@@ -77,6 +94,14 @@ impl Trajectory {
             qd[j] += a * w * c;
             qdd[j] -= a * w * w * s;
         }
+        if let Some((w, series)) = &self.fourier {
+            for (j, s) in series.iter().enumerate() {
+                let [p, v, a] = s.evaluate(*w, t);
+                q[j] += p;
+                qd[j] += v;
+                qdd[j] += a;
+            }
+        }
     }
 
     /// The waypoints around `t` (equal indices: hold that one); `None` without waypoints.
@@ -103,6 +128,7 @@ mod tests {
             offset: None,
             waypoints: vec![vec![1.0, 0.0], vec![3.0, 2.0], vec![4.0, -1.0]],
             sines: Vec::new(),
+            excitation: None,
         };
         let tr = Trajectory::new(&spec, &["j".into()], &[9.0]);
         let at = |t: f64| {

@@ -21,7 +21,7 @@ use admittance_dynamics::{frame_jacobian, Data, Model};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-use crate::plant::config::{finite, frame_index, joint_index, non_negative, window};
+use crate::checks::{finite, frame_index, joint_index, non_negative, window};
 use crate::plant::error::SimError;
 
 fn infinity() -> f64 {

@@ -33,6 +33,7 @@
 #![allow(clippy::result_large_err)]
 #![warn(missing_docs)]
 
+mod checks;
 mod environment;
 mod integrator;
 mod plant;

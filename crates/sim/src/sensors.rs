@@ -24,7 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
-use crate::plant::config::{joint_index, non_negative, window};
+use crate::checks::{joint_index, non_negative, window};
 use crate::plant::error::{check_len, SimError};
 
 fn infinity() -> f64 {

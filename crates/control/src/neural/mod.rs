@@ -66,6 +66,7 @@
 mod config;
 mod controller;
 mod deadzone_inverse;
+mod growth;
 mod networks;
 mod nodes;
 mod true_f;

@@ -1,6 +1,6 @@
 //! Configuration of the broad network fit (docs/method.md sections 5 and 7).
 
-use super::budget::Budget;
+use super::limits::Budget;
 use super::error::BroadError;
 use serde::{Deserialize, Serialize};
 
@@ -25,7 +25,27 @@ pub struct FrictionFeatures {
     pub scales: Vec<f64>,
 }
 
+/// Gaussian nodes of an observer's network unless told otherwise (the paper's 1000): the
+/// one default of the CLI, the scenarios, Python and the co-simulation.
+pub const DEFAULT_NODES: usize = 1000;
+
+/// Scales `v` (rad/s) of the friction-shaped inputs `tanh(qdot / v)` unless told otherwise.
+pub const DEFAULT_FRICTION_SCALES: [f64; 3] = [0.01, 0.05, 0.2];
+
 impl FrictionFeatures {
+    /// The friction-shaped inputs of an observer's network for `n_joints` joints: on the
+    /// velocity block of X = [q, q', q''] when `enabled`, with `scales` (default
+    /// [`DEFAULT_FRICTION_SCALES`]); none otherwise. The one rule of every front end.
+    pub fn for_observer(n_joints: usize, enabled: bool, scales: Option<Vec<f64>>) -> Self {
+        if !enabled {
+            return Self::none();
+        }
+        Self {
+            columns: (n_joints..2 * n_joints).collect(),
+            scales: scales.unwrap_or_else(|| DEFAULT_FRICTION_SCALES.to_vec()),
+        }
+    }
+
     /// No friction features.
     pub fn none() -> Self {
         Self {
@@ -35,12 +55,9 @@ impl FrictionFeatures {
     }
 
     /// Features on the velocity block of X = [q, q', q''] for `n_joints` joints
-    /// (columns `n..2n`) with scales 0.01, 0.05 and 0.2 rad/s.
+    /// (columns `n..2n`) with the [`DEFAULT_FRICTION_SCALES`].
     pub fn joint_velocities(n_joints: usize) -> Self {
-        Self {
-            columns: (n_joints..2 * n_joints).collect(),
-            scales: vec![0.01, 0.05, 0.2],
-        }
+        Self::for_observer(n_joints, true, None)
     }
 
     /// Number of extra pattern columns: `columns.len() * scales.len()`.
@@ -146,7 +163,7 @@ pub struct BroadConfig {
 impl Default for BroadConfig {
     fn default() -> Self {
         Self {
-            nodes: 1000,
+            nodes: DEFAULT_NODES,
             friction: FrictionFeatures::none(),
             centre_subsample: 20_000,
             seed: 0x5eed_b7ad,

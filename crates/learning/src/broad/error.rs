@@ -1,6 +1,6 @@
 //! Error type of the broad network.
 
-use super::budget::format_bytes;
+use super::limits::format_bytes;
 use std::path::PathBuf;
 
 /// Everything that can go wrong when fitting, growing, evaluating, saving or loading a

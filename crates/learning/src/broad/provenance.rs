@@ -1,14 +1,13 @@
 //! What a model knows about itself: the arm it was trained for and every setting that
 //! made it (docs/outputs.md, "Model files"). [`fit`](super::fit) and
-//! [`BroadModel::grow`] record their own settings; the caller adds what only it knows
+//! `BroadModel::grow` record their own settings; the caller adds what only it knows
 //! (the arm, the input conditioning, the validation split, the target) with
-//! [`BroadModel::set_arm`] and [`BroadModel::set_data_settings`]. Every user of a model
-//! checks them: [`BroadModel::check_arm`], [`BroadModel::check_joints`],
-//! [`BroadModel::check_data_settings`].
+//! `BroadModel::set_arm` and `BroadModel::set_data_settings`. Every user of a model
+//! checks them: `BroadModel::check_arm`, `BroadModel::check_joints`,
+//! `BroadModel::check_data_settings`.
 
 use super::config::WidthRule;
 use super::error::BroadError;
-use super::model::BroadModel;
 use serde::{Deserialize, Serialize};
 
 /// Which arm a model was trained for: the joint names in chain order and the arm model's
@@ -130,7 +129,7 @@ impl std::fmt::Display for ValidationSplit {
 }
 
 /// How the caller prepared the rows the network was fitted on; [`fit`](super::fit) cannot
-/// know it, so the caller records it with [`BroadModel::set_data_settings`].
+/// know it, so the caller records it with `BroadModel::set_data_settings`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DataSettings {
@@ -217,8 +216,8 @@ pub struct CentreSettings {
 
 /// The fit's own settings, recorded by [`fit`](super::fit) and
 /// [`fit_with_nodes`](super::fit_with_nodes). The friction features and the chosen
-/// ridge parameter are part of the model itself ([`BroadModel::friction`],
-/// [`BroadModel::lambda_rel`]).
+/// ridge parameter are part of the model itself (`BroadModel::friction`,
+/// `BroadModel::lambda_rel`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FitSettings {
@@ -234,7 +233,7 @@ pub struct FitSettings {
     pub validation_rows: usize,
 }
 
-/// One incremental growth ([`BroadModel::grow`]).
+/// One incremental growth (`BroadModel::grow`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrowthRecord {
@@ -266,12 +265,12 @@ pub enum ArmCheck {
     /// The model records an identity and it matches.
     Matches,
     /// The model records no identity (a file of format version 1, or a model fitted in
-    /// memory without [`BroadModel::set_arm`]): nothing could be checked; callers should
+    /// memory without `BroadModel::set_arm`): nothing could be checked; callers should
     /// say so.
     Unrecorded,
 }
 
-fn joint_differences(model: &[String], given: &[String]) -> Option<String> {
+pub(super) fn joint_differences(model: &[String], given: &[String]) -> Option<String> {
     if model == given {
         return None;
     }
@@ -290,93 +289,6 @@ fn joint_differences(model: &[String], given: &[String]) -> Option<String> {
         model.join(", "),
         given.join(", ")
     ))
-}
-
-impl BroadModel {
-    /// Everything the model knows about how it was made.
-    pub fn provenance(&self) -> &Provenance {
-        &self.provenance
-    }
-
-    /// The arm the model was trained for, if recorded.
-    pub fn arm(&self) -> Option<&ArmIdentity> {
-        self.provenance.arm.as_ref()
-    }
-
-    /// Records the arm the model was trained for. Its joint count must match the
-    /// model's outputs (one torque per joint).
-    pub fn set_arm(&mut self, arm: ArmIdentity) -> Result<(), BroadError> {
-        let n = arm.joints.len();
-        if n != self.d_out {
-            return Err(BroadError::Config(format!(
-                "an arm of {n} joints does not fit a model with {} outputs",
-                self.d_out
-            )));
-        }
-        self.provenance.arm = Some(arm);
-        Ok(())
-    }
-
-    /// Records how the data were prepared (checked with [`DataSettings::validate`]).
-    pub fn set_data_settings(&mut self, settings: DataSettings) -> Result<(), BroadError> {
-        settings.validate()?;
-        self.provenance.data = Some(settings);
-        Ok(())
-    }
-
-    /// Checks that the model was trained for `arm`: same joint names in the same order
-    /// and the same fingerprint. A model that records no identity passes as
-    /// [`ArmCheck::Unrecorded`]; a different arm is [`BroadError::ArmMismatch`], saying
-    /// what differs.
-    pub fn check_arm(&self, arm: &ArmIdentity) -> Result<ArmCheck, BroadError> {
-        let Some(own) = &self.provenance.arm else {
-            return Ok(ArmCheck::Unrecorded);
-        };
-        if let Some(d) = joint_differences(&own.joints, &arm.joints) {
-            return Err(BroadError::ArmMismatch(d));
-        }
-        if own.fingerprint != arm.fingerprint {
-            return Err(BroadError::ArmMismatch(format!(
-                "the model was trained for another model of the arm with the same joint names \
-                 (arm fingerprint {:016x}, this arm's is {:016x}): a joint's kind, axis, origin \
-                 or limits, or a body's mass, centre of mass or inertia differ",
-                own.fingerprint, arm.fingerprint
-            )));
-        }
-        Ok(ArmCheck::Matches)
-    }
-
-    /// Checks only the joint names (for data that name their joints but carry no arm
-    /// model, e.g. a free-motion CSV). As [`check_arm`](Self::check_arm) otherwise.
-    pub fn check_joints<S: AsRef<str>>(&self, joints: &[S]) -> Result<ArmCheck, BroadError> {
-        let Some(own) = &self.provenance.arm else {
-            return Ok(ArmCheck::Unrecorded);
-        };
-        let given: Vec<String> = joints.iter().map(|j| j.as_ref().to_string()).collect();
-        match joint_differences(&own.joints, &given) {
-            Some(d) => Err(BroadError::ArmMismatch(d)),
-            None => Ok(ArmCheck::Matches),
-        }
-    }
-
-    /// Checks that the model's data settings are `expected` (a user of the model must
-    /// condition its inputs the same way and expect the same target).
-    /// [`BroadError::SettingsMismatch`] lists every difference; a model that records no
-    /// settings passes as [`ArmCheck::Unrecorded`].
-    pub fn check_data_settings(&self, expected: &DataSettings) -> Result<ArmCheck, BroadError> {
-        let Some(own) = &self.provenance.data else {
-            return Ok(ArmCheck::Unrecorded);
-        };
-        let diff = own.differences(expected);
-        if diff.is_empty() {
-            Ok(ArmCheck::Matches)
-        } else {
-            Err(BroadError::SettingsMismatch(format!(
-                "the model was trained with {}",
-                diff.join("; ")
-            )))
-        }
-    }
 }
 
 #[cfg(test)]

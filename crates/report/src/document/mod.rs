@@ -13,8 +13,29 @@ mod warnings;
 use admittance_runfolder::files;
 use blocks::Block;
 
-use crate::folder::RunFolder;
+use crate::folder::{RunFolder, Variant};
 use crate::plot::Note;
+
+/// The value of a per-joint metric of `v` at joint `index`.
+pub(crate) fn joint_metric(v: &Variant, name: &str, index: usize) -> Option<f64> {
+    values::per_joint(v, name)?.get(index).copied().flatten()
+}
+
+/// The line said when the folder has no `settings.json`.
+fn settings_note(folder: &RunFolder) -> Option<String> {
+    if folder.settings.is_some() {
+        return None;
+    }
+    let from = if folder.scenario_toml.is_some() {
+        "were read from scenario.toml by the plant's rules"
+    } else {
+        "are not in this folder (no scenario.toml either): the figures show no deadzone band, bound or window"
+    };
+    Some(format!(
+        "this run folder has no `{}` (it was written by an earlier build, or by a plant that does not write it): the deadzone bands, windows and bounds drawn {from}; rerun the scenario to record what the plant applied",
+        files::SETTINGS
+    ))
+}
 
 /// A figure as it appears in the report: its plan and, when drawn, its PNG.
 pub struct Entry<'a> {
@@ -118,7 +139,9 @@ fn build<'a>(
                 .map(|n| (e.id.to_string(), n.text.clone()))
         })
         .collect();
-    let mut out = opening::blocks(folder, warnings::warnings(folder, &notes));
+    let mut all_warnings = warnings::warnings(folder, &notes);
+    all_warnings.extend(settings_note(folder));
+    let mut out = opening::blocks(folder, all_warnings);
     out.push(Block::Paragraph(format!(
         "Joints: {}.",
         folder.joints.join(", ")

@@ -22,6 +22,15 @@ fn variant(name: &str, metrics: Value) -> Variant {
 }
 
 fn folder(scenario: &str, variants: Vec<Variant>, toml: &str) -> RunFolder {
+    let toml = toml.to_string();
+    let mut f = old_folder(scenario, variants, &toml);
+    // A folder of this build: its settings.json holds what the scenario file says.
+    f.settings = Some(f.settings_from_scenario());
+    f
+}
+
+/// A folder written before settings.json: the settings come from scenario.toml.
+fn old_folder(scenario: &str, variants: Vec<Variant>, toml: &str) -> RunFolder {
     RunFolder {
         dir: ".".into(),
         scenario: scenario.into(),
@@ -31,11 +40,23 @@ fn folder(scenario: &str, variants: Vec<Variant>, toml: &str) -> RunFolder {
         warnings: Vec::new(),
         health: None,
         scenario_toml: Some(toml.parse().unwrap()),
+        settings: None,
         free_motion: Vec::new(),
         node_weights: Vec::new(),
         observer_validation: Vec::new(),
     }
 }
+
+/// A deadzone comparison (the neural controller with and without compensation, PD).
+const DEADZONE: &str = "[controller]\nkind = \"neural\"\n\
+    [[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n\
+    [variants.nn_uncompensated]\ncontroller.neural.deadzone_compensation = false\n\
+    [variants.pd]\ncontroller.kind = \"pd\"\n";
+
+/// An observer comparison.
+const OBSERVERS: &str = "[admittance]\ndamping = 3\nstiffness = 5\n\
+    [observer]\nkind = \"learned\"\n[variants.momentum]\nobserver.kind = \"momentum\"\n\
+    [variants.oracle]\nobserver.kind = \"oracle\"\n";
 
 fn md(f: &RunFolder) -> String {
     markdown(f, &[], None)
@@ -71,12 +92,23 @@ fn clean(extra: Value) -> Value {
 #[test]
 fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
     let f = folder(
-        "deadzone",
+        "panda_deadzone_renamed",
         vec![
             variant("nn_compensated", clean(json!({}))),
-            variant("nn_uncompensated", clean(json!({"tracking_rmse": [0.002, 0.0004]}))),
+            variant(
+                "nn_uncompensated",
+                clean(
+                    json!({"tracking_rmse": [0.002, 0.0004], "ee_error_max": 0.003, "ee_error_rms": 0.002}),
+                ),
+            ),
+            variant(
+                "pd",
+                clean(
+                    json!({"tracking_rmse": [0.006, 0.0004], "ee_error_max": 0.005, "ee_error_rms": 0.004}),
+                ),
+            ),
         ],
-        "description = \"Experiment A\"\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n",
+        &format!("description = \"Experiment A\"\n{DEADZONE}"),
     );
     let top = opening(&f);
     assert!(
@@ -87,7 +119,23 @@ fn a_clean_run_opens_with_the_claim_and_the_headline_beside_the_paper() {
         top.contains("below 0.04 m") && top.contains("0.001400 m"),
         "{top}"
     );
+    // The bound says nothing by itself: the other controllers' values are beside it.
+    assert!(
+        top.contains("uncompensated 0.003000 m (`nn_uncompensated`); PD 0.005000 m (`pd`); every controller is below it, so the bound does not tell them apart"),
+        "{top}"
+    );
     assert!(top.contains("×0.75"), "the s0 ratio 0.0015 / 0.002: {top}");
+    // The checks that tell them apart: against the uncompensated controller and PD.
+    assert!(
+        top.contains("| s0 tracking RMSE, compensated / PD (its linear part alone) | – (the learning should beat PD) | 0.001500 / 0.006000 rad = ×0.25 (`nn_compensated` / `pd`) | yes |"),
+        "{top}"
+    );
+    assert!(
+        top.contains(
+            "`nn_compensated` 9.000e-4 m; `nn_uncompensated` 0.002000 m; `pd` 0.004000 m | yes |"
+        ),
+        "{top}"
+    );
     assert!(top.contains("| yes |"), "{top}");
     assert!(top.contains("No warnings"), "{top}");
     // Metrics this summary lacks are named: they could not be checked.
@@ -146,11 +194,17 @@ fn metrics_tables_have_units_windows_joint_columns_and_the_scenario_order() {
     let f = folder(
         "deadzone",
         vec![
-            variant("nn_compensated", clean(json!({"deadzone_time_fraction": [0.04, 0.0]}))),
-            variant("nn_uncompensated", clean(json!({"deadzone_time_fraction": [0.036, 0.0]}))),
+            variant(
+                "nn_compensated",
+                clean(json!({"deadzone_time_fraction": [0.04, 0.0]})),
+            ),
+            variant(
+                "nn_uncompensated",
+                clean(json!({"deadzone_time_fraction": [0.036, 0.0]})),
+            ),
             variant("pd", clean(json!({"deadzone_time_fraction": [0.05, 0.0]}))),
         ],
-        "evaluation_start = 20\n[[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n",
+        &format!("evaluation_start = 20\n{DEADZONE}"),
     );
     let text = md(&f);
     let metrics = &text[text.find("## Metrics").unwrap()..text.find("## Figures").unwrap()];
@@ -216,7 +270,7 @@ fn each_experiment_has_its_opening() {
                 json!({"external_torque_nrmse": 0.81, "reference_bound_violations": 2}),
             ),
         ],
-        "[admittance.saturation]\nhalf_range = [1.1, inf]\n",
+        &format!("{OBSERVERS}[admittance.saturation]\nrho = 0.95\nhalf_range = [1.1, inf]\n"),
     );
     let top = opening(&b);
     assert!(
@@ -225,7 +279,13 @@ fn each_experiment_has_its_opening() {
     );
     assert!(top.contains("`learned` 0.4600; `momentum` 0.8100"), "{top}");
     assert!(
-        top.contains("5.088 s (1000 nodes)") && top.contains("8.400 s"),
+        top.contains("5.088 s (1000 nodes, the authors' computer)")
+            && top.contains("8.400 s (`learned`, 1000 nodes; on the computer that made this run)"),
+        "{top}"
+    );
+    assert!(!top.contains("another machine"), "{top}");
+    assert!(
+        top.contains("`learned` 0.4600 (next `momentum` 0.8100, ×1.8 larger)"),
         "{top}"
     );
     assert!(
@@ -247,7 +307,7 @@ fn each_experiment_has_its_opening() {
             "dynamic",
             json!({"nodes_discarded": 185, "nodes_added": 100, "approx_rmse_full": 2.5633, "approx_rmse_after_discard": 2.5720, "approx_rmse_after_growth": 1.5126}),
         )],
-        "",
+        "[dynamic_nodes]\napproximation_window = 12.0\n",
     );
     let top = opening(&c);
     assert!(
@@ -257,7 +317,11 @@ fn each_experiment_has_its_opening() {
     assert!(top.contains("(+0.3 %) | yes (within 10 %) |"), "{top}");
     assert!(top.contains("(-41.2 %) | yes |"), "{top}");
 
-    let data = folder("free_motion", vec![variant("base", json!({}))], "");
+    let data = folder(
+        "free_motion",
+        vec![variant("base", json!({}))],
+        "[record]\nfree_motion_csv = true\n",
+    );
     let top = opening(&data);
     assert!(
         top.contains("| duration | 450 s | 9 s, 10 samples |"),
@@ -278,7 +342,7 @@ fn the_html_is_well_formed_and_self_contained() {
     let f = folder(
         "deadzone",
         vec![variant("nn_compensated", clean(json!({})))],
-        "",
+        DEADZONE,
     );
     let text = html(&f, &[], None);
     assert!(text.starts_with("<!DOCTYPE html>"));
@@ -324,11 +388,69 @@ fn the_admittance_claim_takes_its_window_from_the_run() {
     let b = folder(
         "admittance",
         vec![variant("learned", json!({"external_torque_nrmse": 0.46}))],
-        "[[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 1.5\nt_end = 7\n",
+        &format!("{OBSERVERS}[[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 1.5\nt_end = 7\n"),
     );
     let top = opening(&b);
     assert!(
         top.contains("while the environment acts (1.5-7 s, Figs 18-19)"),
         "{top}"
     );
+}
+
+#[test]
+fn a_compensated_controller_that_does_not_beat_the_others_says_no() {
+    let f = folder(
+        "deadzone",
+        vec![
+            variant(
+                "nn_compensated",
+                clean(json!({"tracking_rmse": [0.004, 0.0003], "ee_error_rms": 0.003})),
+            ),
+            variant(
+                "nn_uncompensated",
+                clean(json!({"tracking_rmse": [0.002, 0.0004], "ee_error_rms": 0.002})),
+            ),
+            variant(
+                "pd",
+                clean(json!({"tracking_rmse": [0.003, 0.0004], "ee_error_rms": 0.004})),
+            ),
+        ],
+        DEADZONE,
+    );
+    let top = opening(&f);
+    assert!(
+        top.contains(
+            "×2.00 (`nn_compensated` / `nn_uncompensated`), deadzone [-0.49, 0.49] N m | no |"
+        ),
+        "{top}"
+    );
+    assert!(
+        top.contains("×1.33 (`nn_compensated` / `pd`) | no |"),
+        "{top}"
+    );
+    assert!(top.contains("`pd` 0.004000 m | no |"), "{top}");
+}
+
+#[test]
+fn an_old_folder_says_where_its_settings_came_from() {
+    let f = old_folder(
+        "deadzone",
+        vec![variant("nn_compensated", clean(json!({})))],
+        DEADZONE,
+    );
+    let top = opening(&f);
+    assert!(
+        top.contains("has no `settings.json`")
+            && top.contains("read from scenario.toml")
+            && top.contains("rerun the scenario"),
+        "{top}"
+    );
+    // Still the deadzone report: the classification reads scenario.toml's content.
+    assert!(top.starts_with("# Experiment A"), "{top}");
+    assert!(!opening(&folder(
+        "deadzone",
+        vec![variant("nn_compensated", clean(json!({})))],
+        DEADZONE
+    ))
+    .contains("settings.json"));
 }

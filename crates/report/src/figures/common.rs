@@ -104,6 +104,38 @@ pub fn planned(number: u32, stem: &str, figure: Result<Figure, String>) -> Plann
     }
 }
 
+/// Fig `number` of the paper about joint `joint` (the paper's s0): the caption and the
+/// data name that joint when it is not s0.
+pub fn planned_joint(
+    number: u32,
+    stem: &str,
+    joint: &str,
+    figure: Result<Figure, String>,
+) -> Planned {
+    let mut p = planned(number, stem, figure);
+    let s = short(joint);
+    if !joint.is_empty() && s != "s0" {
+        p.caption = p.caption.replace("s_0", s);
+        p.data = p.data.replace("s0", s);
+    }
+    p
+}
+
+/// The joint an observer comparison is about (`crate::experiment::contact_joint`) and its
+/// short name.
+pub fn contact_joint(folder: &RunFolder) -> Result<(&str, &str), String> {
+    let j = crate::experiment::contact_joint(folder)
+        .ok_or_else(|| "summary.json lists no joints".to_string())?;
+    Ok((j, short(j)))
+}
+
+/// The worst-tracked joint (`crate::experiment::worst_joint`) and its short name.
+pub fn worst_joint(folder: &RunFolder) -> Result<(&str, &str), String> {
+    let j = crate::experiment::worst_joint(folder)
+        .ok_or_else(|| "summary.json lists no joints".to_string())?;
+    Ok((j, short(j)))
+}
+
 /// A figure not in the paper.
 pub fn extra(
     id: &str,
@@ -185,7 +217,7 @@ pub fn contact_spans(folder: &RunFolder, v: &Variant) -> Vec<Span> {
     let (spans, label) = if windows.is_empty() {
         (touching(folder, v, t), "in contact (tau_ext non-zero)")
     } else {
-        (windows, "environment acts (scenario.toml)")
+        (windows, "environment acts (the run's settings)")
     };
     spans
         .into_iter()

@@ -1,22 +1,36 @@
-//! Experiment A, deadzone compensation (scenario `deadzone`): Figs 7-12, and Figs 11b, 12b
-//! for the wide-deadzone pair when the run has it.
+//! Experiment A, deadzone compensation: Figs 7-12 for the first deadzone of the run, and
+//! Figs 11b, 12b for a second one (the wide deadzone of `scenarios/deadzone.toml`). The
+//! variants are found by what they are (`crate::experiment::deadzone_groups`: the neural
+//! controller with and without compensation on the same deadzone), not by their names; the
+//! joint shown is the one with the deadzone (the worst tracked when several have one).
 
 use admittance_dynamics::{forward_kinematics, Data, Model};
 use admittance_runfolder::columns;
 
 use super::common::{
-    compared, extra, figure, joint0, joint_col, last_window, line, panel, planned, short, time,
+    compared, extra, figure, joint_col, last_window, line, panel, planned_joint, short, time,
     tracking, variant,
 };
 use super::model::{Figure, Line, Marker, Panel, Planned};
 use super::Arm;
+use crate::experiment::{deadzone_groups, DeadzoneGroup};
 use crate::folder::{RunFolder, Variant};
 use crate::number::setting;
 
-const WITH: &str = "nn_compensated";
-const WITHOUT: &str = "nn_uncompensated";
-const WITH_WIDE: &str = "nn_compensated_wide";
-const WITHOUT_WIDE: &str = "nn_uncompensated_wide";
+/// The variant of a group, or why the run lacks it.
+fn member<'a>(name: &'a Option<String>, what: &str) -> Result<&'a str, String> {
+    name.as_deref().ok_or_else(|| {
+        format!("the run has no variant with the neural controller {what} on this deadzone")
+    })
+}
+
+fn with_name(g: &DeadzoneGroup) -> Result<&str, String> {
+    member(&g.with, "with deadzone compensation")
+}
+
+fn without_name(g: &DeadzoneGroup) -> Result<&str, String> {
+    member(&g.without, "without deadzone compensation")
+}
 
 fn error_line(v: &Variant, j: &str, color: usize, thin: bool) -> Result<Line, String> {
     let r = joint_col(v, columns::REFERENCE, j)?;
@@ -37,7 +51,7 @@ fn deadzone_band(folder: &RunFolder, variant: &str, joint: &str) -> Vec<Marker> 
             Marker {
                 at: l,
                 label: format!(
-                    "deadzone [d_l, d_r] = [{}, {}] N m (scenario.toml)",
+                    "deadzone [d_l, d_r] = [{}, {}] N m (as the plant applied it)",
                     setting(l),
                     setting(r)
                 ),
@@ -53,8 +67,14 @@ fn deadzone_band(folder: &RunFolder, variant: &str, joint: &str) -> Vec<Marker> 
 
 fn control_inputs(folder: &RunFolder, v: &Variant, j: &str) -> Result<Panel, String> {
     let t = time(v)?;
+    let range = last_window(t, 6.0);
+    // The run's own length when it is shorter than the paper's window.
+    let span = match range {
+        Some((a, b)) if b - a < 6.0 - 1e-9 => "whole run".to_string(),
+        _ => "last 6 s".to_string(),
+    };
     let mut p = panel(
-        format!("joint {}, variant {}, last 6 s", short(j), v.name),
+        format!("joint {}, variant {}, {span}", short(j), v.name),
         "torque (N m)",
         vec![
             line(
@@ -74,7 +94,7 @@ fn control_inputs(folder: &RunFolder, v: &Variant, j: &str) -> Result<Panel, Str
         ],
     );
     p.hlines = deadzone_band(folder, &v.name, j);
-    p.x_range = last_window(t, 6.0);
+    p.x_range = range;
     Ok(p)
 }
 
@@ -110,8 +130,8 @@ fn ee_positions(
     Ok(out)
 }
 
-fn fig7(folder: &RunFolder, arm: Arm<'_>) -> Result<Figure, String> {
-    let v = variant(folder, WITH)?;
+fn fig7(folder: &RunFolder, g: &DeadzoneGroup, arm: Arm<'_>) -> Result<Figure, String> {
+    let v = variant(folder, with_name(g)?)?;
     let model = arm?;
     let names: Vec<&str> = model.joint_names().collect();
     if names.len() != folder.joints.len() || names.iter().zip(&folder.joints).any(|(a, b)| *a != b)
@@ -147,8 +167,8 @@ fn fig7(folder: &RunFolder, arm: Arm<'_>) -> Result<Figure, String> {
 
 /// Fig 8: the y axis is sized to the evaluation window, so that the start-up transient
 /// does not flatten the steady error.
-fn fig8(folder: &RunFolder) -> Result<Figure, String> {
-    let with = variant(folder, WITH)?;
+fn fig8(folder: &RunFolder, g: &DeadzoneGroup) -> Result<Figure, String> {
+    let with = variant(folder, with_name(g)?)?;
     let mut lines = vec![line(
         format!("|p_r - p|, {}", with.name),
         time(with)?,
@@ -156,7 +176,7 @@ fn fig8(folder: &RunFolder) -> Result<Figure, String> {
         1,
         false,
     )];
-    if let Ok(without) = variant(folder, WITHOUT) {
+    if let Ok(without) = without_name(g).and_then(|n| variant(folder, n)) {
         lines.push(line(
             format!("|p_r - p|, {}", without.name),
             time(without)?,
@@ -178,9 +198,12 @@ fn fig8(folder: &RunFolder) -> Result<Figure, String> {
     ))
 }
 
-fn errors(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
-    let (va, vb) = (variant(folder, with)?, variant(folder, without)?);
+fn errors(folder: &RunFolder, g: &DeadzoneGroup, number: &str) -> Result<Figure, String> {
+    let (j, s) = (g.joint.as_str(), short(&g.joint));
+    let (va, vb) = (
+        variant(folder, with_name(g)?)?,
+        variant(folder, without_name(g)?)?,
+    );
     let from = folder.evaluation_start();
     let mut p = panel(
         format!("joint {s}; y axis fitted to t ≥ {from} s (evaluation window)"),
@@ -195,9 +218,12 @@ fn errors(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result
     ))
 }
 
-fn inputs(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
-    let (va, vb) = (variant(folder, with)?, variant(folder, without)?);
+fn inputs(folder: &RunFolder, g: &DeadzoneGroup, number: &str) -> Result<Figure, String> {
+    let (j, s) = (g.joint.as_str(), short(&g.joint));
+    let (va, vb) = (
+        variant(folder, with_name(g)?)?,
+        variant(folder, without_name(g)?)?,
+    );
     Ok(compared(
         format!("Fig. {number}: control inputs of joint {s}"),
         vec![
@@ -207,51 +233,93 @@ fn inputs(folder: &RunFolder, with: &str, without: &str, number: &str) -> Result
     ))
 }
 
-fn joint_tracking(folder: &RunFolder, name: &str, title: &str) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
+fn joint_tracking(
+    folder: &RunFolder,
+    g: &DeadzoneGroup,
+    name: Result<&str, String>,
+    title: &str,
+) -> Result<Figure, String> {
+    let (j, s) = (g.joint.as_str(), short(&g.joint));
     Ok(figure(
         format!("{title} {s}"),
-        vec![tracking(variant(folder, name)?, j, columns::DESIRED)?],
+        vec![tracking(variant(folder, name?)?, j, columns::DESIRED)?],
     ))
 }
 
 /// Figs 7-12 (and 11b, 12b).
 pub fn plan(folder: &RunFolder, arm: Arm<'_>) -> Vec<Planned> {
+    let groups = deadzone_groups(folder);
+    let Some(g) = groups.first() else {
+        let why = || Err("the run has no variant with an actuator deadzone".to_string());
+        return [
+            (7, "end_effector"),
+            (8, "end_effector_error"),
+            (9, "s0_with_compensation"),
+            (10, "s0_without_compensation"),
+            (11, "s0_errors"),
+            (12, "s0_control_inputs"),
+        ]
+        .into_iter()
+        .map(|(n, stem)| super::common::planned(n, stem, why()))
+        .collect();
+    };
+    let j = g.joint.as_str();
     let mut out = vec![
-        planned(7, "end_effector", fig7(folder, arm)),
-        planned(8, "end_effector_error", fig8(folder)),
-        planned(
+        planned_joint(7, "end_effector", j, fig7(folder, g, arm)),
+        planned_joint(8, "end_effector_error", j, fig8(folder, g)),
+        planned_joint(
             9,
             "s0_with_compensation",
-            joint_tracking(folder, WITH, "Fig. 9: tracking with NN compensation, joint"),
-        ),
-        planned(
-            10,
-            "s0_without_compensation",
+            j,
             joint_tracking(
                 folder,
-                WITHOUT,
+                g,
+                with_name(g),
+                "Fig. 9: tracking with NN compensation, joint",
+            ),
+        ),
+        planned_joint(
+            10,
+            "s0_without_compensation",
+            j,
+            joint_tracking(
+                folder,
+                g,
+                without_name(g),
                 "Fig. 10: tracking without NN compensation, joint",
             ),
         ),
-        planned(11, "s0_errors", errors(folder, WITH, WITHOUT, "11")),
-        planned(12, "s0_control_inputs", inputs(folder, WITH, WITHOUT, "12")),
+        planned_joint(11, "s0_errors", j, errors(folder, g, "11")),
+        planned_joint(12, "s0_control_inputs", j, inputs(folder, g, "12")),
     ];
-    if folder.variant(WITH_WIDE).is_some() && folder.variant(WITHOUT_WIDE).is_some() {
-        let data = format!("the same columns of {WITH_WIDE}, {WITHOUT_WIDE}");
+    if let Some(b) = groups
+        .get(1)
+        .filter(|b| b.with.is_some() && b.without.is_some())
+    {
+        let band = folder
+            .deadzone(b.with.as_deref().unwrap_or_default(), &b.joint)
+            .map_or(String::new(), |(l, r)| {
+                format!(", deadzone [{}, {}] N m", setting(l), setting(r))
+            });
+        let data = format!(
+            "the same columns of {}, {} (joint {}{band})",
+            b.with.as_deref().unwrap_or_default(),
+            b.without.as_deref().unwrap_or_default(),
+            short(&b.joint)
+        );
         out.push(extra(
             "11b",
             "fig11b_s0_errors_wide",
-            "Fig. 11 for the wide deadzone pair (not in the paper).",
+            "Fig. 11 for the run's second deadzone (not in the paper).",
             &data,
-            errors(folder, WITH_WIDE, WITHOUT_WIDE, "11b"),
+            errors(folder, b, "11b"),
         ));
         out.push(extra(
             "12b",
             "fig12b_s0_control_inputs_wide",
-            "Fig. 12 for the wide deadzone pair (not in the paper).",
+            "Fig. 12 for the run's second deadzone (not in the paper).",
             &data,
-            inputs(folder, WITH_WIDE, WITHOUT_WIDE, "12b"),
+            inputs(folder, b, "12b"),
         ));
     }
     out

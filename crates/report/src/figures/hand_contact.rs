@@ -112,7 +112,7 @@ fn wall_figure(folder: &RunFolder, variants: &[&Variant]) -> Result<Figure, Stri
         let walls = folder.walls(&v.name);
         let wall = walls.first().ok_or_else(|| {
             format!(
-                "scenario.toml has no [[plant.environment.walls]] for variant `{}`",
+                "the run has no wall ([[plant.environment.walls]]) for variant `{}`",
                 v.name
             )
         })?;
@@ -223,7 +223,7 @@ pub fn plan(folder: &RunFolder) -> Vec<Planned> {
             "H2",
             "h2_hand_wall",
             "The hand's path against the wall: signed distance from the wall plane (not in the paper).",
-            "x_hand_d, x_hand_r, x_hand against the first [[plant.environment.walls]] of scenario.toml",
+            "x_hand_d, x_hand_r, x_hand against the first wall of the run (settings.json)",
             wall_figure(folder, &variants),
         ),
         extra(

@@ -1,11 +1,11 @@
 //! Which figure of the paper comes from which columns of a run folder, and the figures
 //! themselves as data (panels of lines, bands, markers), ready to draw.
 //!
-//! Experiment A (scenario `deadzone`) gives Figs 7-12 ([`deadzone`]), B (`admittance`, and
-//! its data runs `free_motion`, `free_motion_validation`) Figs 13-20 ([`observer`]), C
-//! (`dynamic_nodes`) Figs 21-26 ([`dynamic_nodes`]); a run with hand columns adds the
-//! hand-contact figures ([`hand_contact`]), any other scenario gets generic ones
-//! ([`generic`]). A figure whose data is not in the folder is planned as unavailable, with
+//! The experiment is found from what the run contains (`crate::experiment`): a deadzone
+//! comparison gives Figs 7-12 ([`deadzone`]), an observer comparison (and its free-motion
+//! data runs) Figs 13-20 ([`observer`]), dynamic nodes Figs 21-26 ([`dynamic_nodes`]); a run
+//! with hand columns adds the hand-contact figures ([`hand_contact`]), any other scenario
+//! gets generic ones ([`generic`]). A figure whose data is not in the folder is planned as unavailable, with
 //! the reason.
 
 mod catalogue;
@@ -41,7 +41,7 @@ pub fn plan(folder: &RunFolder, arm: Arm<'_>) -> Vec<Planned> {
         Experiment::TrainingData => observer::plan(folder, observer::Run::Training),
         Experiment::ValidationData => observer::plan(folder, observer::Run::Validation),
         Experiment::DynamicNodes => dynamic_nodes::plan(folder),
-        Experiment::Other if has_hand_columns(folder) => Vec::new(),
+        Experiment::HandContact => Vec::new(),
         Experiment::Other => generic::plan(folder),
     };
     if has_hand_columns(folder) {

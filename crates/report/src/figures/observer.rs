@@ -5,8 +5,8 @@
 use admittance_runfolder::{columns, files};
 
 use super::common::{
-    compared, dashed, figure, joint0, joint_col, line, panel, planned, time, tracking,
-    JOINT_COLORS, VARIANT_COLORS,
+    compared, contact_joint, dashed, figure, joint_col, line, panel, planned, planned_joint, time,
+    tracking, JOINT_COLORS, VARIANT_COLORS,
 };
 use super::model::{Figure, Line, Marker, Panel, Planned};
 use crate::folder::{RunFolder, Variant};
@@ -206,7 +206,7 @@ fn fig16(folder: &RunFolder) -> Result<Figure, String> {
 }
 
 fn fig17(folder: &RunFolder) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
+    let (j, s) = contact_joint(folder)?;
     // One panel per variant: the true torque depends on how that variant's arm moved.
     let panels = folder
         .variants
@@ -246,7 +246,7 @@ fn fig17(folder: &RunFolder) -> Result<Figure, String> {
 }
 
 fn fig19(folder: &RunFolder) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
+    let (j, s) = contact_joint(folder)?;
     let panels = folder
         .variants
         .iter()
@@ -262,7 +262,7 @@ fn fig19(folder: &RunFolder) -> Result<Figure, String> {
 }
 
 fn fig18_20(folder: &RunFolder, bounds: bool) -> Result<Figure, String> {
-    let (j, s) = joint0(folder)?;
+    let (j, s) = contact_joint(folder)?;
     let first = folder.variants.first().ok_or("the run has no variants")?;
     let mut p = with_contact(
         folder,
@@ -279,13 +279,13 @@ fn fig18_20(folder: &RunFolder, bounds: bool) -> Result<Figure, String> {
             vec![p],
         ));
     }
-    match folder.saturation_bounds(0) {
+    match folder.saturation_bounds(j) {
         Some((lo, hi)) if lo.is_finite() && hi.is_finite() => {
             p.hlines = vec![
                 Marker {
                     at: hi,
                     label: format!(
-                        "bounds c ± C = [{}, {}] (scenario.toml)",
+                        "bounds c ± C = [{}, {}] (the run's saturation)",
                         setting(lo),
                         setting(hi)
                     ),
@@ -298,7 +298,7 @@ fn fig18_20(folder: &RunFolder, bounds: bool) -> Result<Figure, String> {
         }
         _ => p
             .title
-            .push_str(" (no finite saturation bound in scenario.toml)"),
+            .push_str(" (the run has no finite saturation bound on this joint)"),
     }
     Ok(figure(
         format!("Fig. 20: trajectory constraint on joint {s}"),
@@ -322,12 +322,13 @@ pub fn plan(folder: &RunFolder, run: Run) -> Vec<Planned> {
         planned(15, "validation_performance", validation_figure(folder)),
     ];
     if run == Run::Admittance {
+        let j = contact_joint(folder).map_or("", |(j, _)| j);
         out.extend([
             planned(16, "test_trajectory", fig16(folder)),
-            planned(17, "test_performance", fig17(folder)),
-            planned(18, "s0_adaptation", fig18_20(folder, false)),
-            planned(19, "s0_tracking", fig19(folder)),
-            planned(20, "s0_constraint", fig18_20(folder, true)),
+            planned_joint(17, "test_performance", j, fig17(folder)),
+            planned_joint(18, "s0_adaptation", j, fig18_20(folder, false)),
+            planned_joint(19, "s0_tracking", j, fig19(folder)),
+            planned_joint(20, "s0_constraint", j, fig18_20(folder, true)),
         ]);
     }
     out

@@ -41,9 +41,26 @@ fn table(prefixes: &[&str], extra: &[&str], rows: usize) -> Table {
     Table::from_columns(names, data)
 }
 
+/// A deadzone comparison: the neural controller with and without compensation and PD on
+/// the paper's deadzone, and a wide pair (`wide_on`, `wide_off`).
 const TOML: &str = "evaluation_start = 1.5\n\
+    [controller]\nkind = \"neural\"\n\
     [[plant.deadzones]]\njoint = \"left_s0\"\nd_left = -0.49\nd_right = 0.49\n\
-    [variants.nn_uncompensated]\nplant.deadzones = [{ joint = \"left_s0\", d_left = -5.0, d_right = 5.0 }]\n";
+    [variants.nn_uncompensated]\ncontroller.neural.deadzone_compensation = false\n\
+    [variants.pd]\ncontroller.kind = \"pd\"\n\
+    [variants.wide_on]\nplant.deadzones = [{ joint = \"left_s0\", d_left = -5.0, d_right = 5.0 }]\n\
+    [variants.wide_off]\ncontroller.neural.deadzone_compensation = false\n\
+    plant.deadzones = [{ joint = \"left_s0\", d_left = -5.0, d_right = 5.0 }]\n";
+
+/// An observer comparison: a joint-space admittance driven by each variant's observer.
+const OBSERVERS: &str = "[admittance]\ndamping = 3\nstiffness = 5\n\
+    [admittance.saturation]\nrho = 0.95\nhalf_range = [1.1, inf]\n\
+    [observer]\nkind = \"oracle\"\n\
+    [variants.learned]\nobserver.kind = \"learned\"\n\
+    [variants.momentum]\nobserver.kind = \"momentum\"\n";
+
+/// A free-motion data run.
+const DATA: &str = "[record]\nfree_motion_csv = true\n";
 
 fn folder_with(scenario: &str, variants: &[(&str, Table)], toml: &str) -> RunFolder {
     RunFolder {
@@ -62,6 +79,7 @@ fn folder_with(scenario: &str, variants: &[(&str, Table)], toml: &str) -> RunFol
         warnings: Vec::new(),
         health: None,
         scenario_toml: Some(toml.parse().unwrap()),
+        settings: None,
         free_motion: Vec::new(),
         node_weights: Vec::new(),
         observer_validation: Vec::new(),
@@ -131,9 +149,8 @@ fn experiment_a_maps_figures_to_columns() {
     assert!(fig12.shared_y);
     let band: Vec<f64> = fig12.panels[0].hlines.iter().map(|m| m.at).collect();
     assert_eq!(band, [-0.49, 0.49]);
-    // ... as the variant sees it: its own override.
     let band: Vec<f64> = fig12.panels[1].hlines.iter().map(|m| m.at).collect();
-    assert_eq!(band, [-5.0, 5.0]);
+    assert_eq!(band, [-0.49, 0.49]);
     let r = fig12.panels[0].x_range.unwrap();
     let t_end = *v.table.col("t").unwrap().last().unwrap();
     assert!(
@@ -182,7 +199,7 @@ fn missing_variant_is_named() {
         .unwrap_err()
         .clone();
     assert!(
-        reason.contains("nn_compensated") && reason.contains("pd"),
+        reason.contains("no variant with the neural controller with deadzone compensation"),
         "{reason}"
     );
 }
@@ -214,7 +231,14 @@ fn dynamic_folder() -> (RunFolder, Vec<f64>) {
         ],
         vec![t.clone(), f_col.clone(), f_col, nodes],
     );
-    (folder("dynamic_nodes", &[("dynamic", tab)]), t)
+    (
+        folder_with(
+            "renamed",
+            &[("dynamic", tab)],
+            "[dynamic_nodes]\napproximation_window = 12.0\n",
+        ),
+        t,
+    )
 }
 
 /// A weights table: `alive(id, t)` says when node `id` exists (its norm is `0.1 (id + 1) t`).
@@ -327,7 +351,7 @@ fn weight_figures_highlight_the_most_active_nodes_over_a_band_of_the_rest() {
 fn experiment_b_draws_fig_13_and_14_each_from_its_own_data() {
     let t = table(&ALL, &[], 30);
     let training = plan(
-        &folder("free_motion", &[("base", t.clone())]),
+        &folder_with("free_motion", &[("base", t.clone())], DATA),
         Err("unused".into()),
     );
     let ids: Vec<(&str, bool)> = training
@@ -336,7 +360,7 @@ fn experiment_b_draws_fig_13_and_14_each_from_its_own_data() {
         .collect();
     assert_eq!(ids, [("13", true), ("14", false), ("15", false)]);
     // A validation run's data are the validation trajectory, never Fig 13's.
-    let mut validation_folder = folder("free_motion_validation", &[("base", t.clone())]);
+    let mut validation_folder = folder_with("free_motion_validation", &[("base", t.clone())], DATA);
     let other = table(&["q"], &[], 12);
     validation_folder.free_motion = vec![("free_motion.csv".into(), other.clone())];
     let validation = plan(&validation_folder, Err("unused".into()));
@@ -351,7 +375,11 @@ fn experiment_b_draws_fig_13_and_14_each_from_its_own_data() {
     assert!(fig14.panels[0].title.contains("free_motion.csv"));
 
     let admittance = plan(
-        &folder("admittance", &[("momentum", t.clone()), ("learned", t)]),
+        &folder_with(
+            "renamed",
+            &[("momentum", t.clone()), ("learned", t)],
+            OBSERVERS,
+        ),
         Err("unused".into()),
     );
     let ids: Vec<&str> = admittance.iter().map(|p| p.id.as_str()).collect();
@@ -367,7 +395,8 @@ fn experiment_b_draws_fig_13_and_14_each_from_its_own_data() {
 
 #[test]
 fn experiment_b_validation_file_gives_figs_14_and_15() {
-    let mut with_validation = folder("admittance", &[("learned", table(&[], &[], 5))]);
+    let mut with_validation =
+        folder_with("admittance", &[("learned", table(&[], &[], 5))], OBSERVERS);
     let columns: Vec<String> = std::iter::once("t".to_string())
         .chain(J.iter().map(|j| format!("target.{j}")))
         .chain(J.iter().map(|j| format!("prediction.{j}")))
@@ -390,16 +419,17 @@ fn experiment_b_validation_file_gives_figs_14_and_15() {
 
 #[test]
 fn contact_windows_are_shaded_from_the_scenario_or_the_data() {
-    let toml =
-        "[[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 1.0\nt_end = 2.0\n";
+    let toml = format!(
+        "{OBSERVERS}[[plant.environment.joint_springs]]\njoints = [\"left_s0\"]\nt_start = 1.0\nt_end = 2.0\n"
+    );
     let t = table(&ALL, &[], 40);
-    let f = folder_with("admittance", &[("learned", t.clone())], toml);
+    let f = folder_with("admittance", &[("learned", t.clone())], &toml);
     let plan = plan(&f, Err("unused".into()));
     for id in ["16", "17", "18", "19", "20"] {
         let spans = &figure_of(&plan, id).panels[0].spans;
         assert_eq!(spans.len(), 1, "Fig {id}");
         assert_eq!((spans[0].from, spans[0].to), (1.0, 2.0), "Fig {id}");
-        assert!(spans[0].label.contains("scenario.toml"));
+        assert!(spans[0].label.contains("environment acts"));
     }
     // Without an environment in scenario.toml: where the true external torque is non-zero.
     let mut quiet = t.clone();
@@ -417,7 +447,7 @@ fn contact_windows_are_shaded_from_the_scenario_or_the_data() {
         *v = if (10..20).contains(&row) { 0.5 } else { 0.0 };
     }
     quiet.data[j].iter_mut().for_each(|v| *v = 0.0);
-    let f = folder_with("admittance", &[("learned", quiet)], "");
+    let f = folder_with("admittance", &[("learned", quiet)], OBSERVERS);
     let plan = super::plan(&f, Err("unused".into()));
     let spans = &figure_of(&plan, "17").panels[0].spans;
     assert_eq!(spans.len(), 1);
@@ -502,4 +532,139 @@ fn task_space_runs_get_the_hand_contact_figures() {
     let plan = super::plan(&f, Err("unused".into()));
     let reason = plan[1].figure.as_ref().unwrap_err();
     assert!(reason.contains("walls"), "{reason}");
+}
+
+/// Columns of every per-joint signal where `tracking(joint)` sets how far `q` is from `q_r`.
+fn tracking_table(rows: usize, error: &dyn Fn(&str) -> f64) -> Table {
+    let mut t = table(&ALL, &["ee_error"], rows);
+    for j in J {
+        let r = t
+            .columns
+            .iter()
+            .position(|c| *c == format!("q_r.{j}"))
+            .unwrap();
+        let q = t
+            .columns
+            .iter()
+            .position(|c| *c == format!("q.{j}"))
+            .unwrap();
+        let e = error(j);
+        t.data[q] = t.data[r].iter().map(|x| x - e).collect();
+    }
+    t
+}
+
+#[test]
+fn a_renamed_deadzone_scenario_gets_the_deadzone_report_for_its_deadzone_joint() {
+    // The Panda's file, renamed, with variants named otherwise and the deadzone on the
+    // second joint: the report is found from the deadzone and the controllers, and its
+    // figures show that joint.
+    let toml = "evaluation_start = 0.5\n\
+        [controller]\nkind = \"neural\"\n\
+        [[plant.deadzones]]\njoint = \"left_s1\"\nd_left = -0.3\nd_right = 0.4\n\
+        [variants.off]\ncontroller.neural.deadzone_compensation = false\n\
+        [variants.linear]\ncontroller.kind = \"pd\"\n";
+    let t = tracking_table(30, &|_| 0.01);
+    let mut f = folder_with(
+        "my_arm_experiment",
+        &[("linear", t.clone()), ("on", t.clone()), ("off", t)],
+        toml,
+    );
+    for (name, rmse) in [
+        ("on", [0.001, 0.002]),
+        ("off", [0.001, 0.02]),
+        ("linear", [0.003, 0.03]),
+    ] {
+        let v = f.variants.iter_mut().find(|v| v.name == name).unwrap();
+        v.metrics
+            .insert("tracking_rmse".into(), serde_json::json!(rmse));
+    }
+    assert_eq!(
+        crate::experiment::Experiment::of(&f),
+        crate::experiment::Experiment::Deadzone
+    );
+    let groups = crate::experiment::deadzone_groups(&f);
+    assert_eq!(groups.len(), 1);
+    assert_eq!(
+        (
+            groups[0].with.as_deref(),
+            groups[0].without.as_deref(),
+            groups[0].pd.as_deref()
+        ),
+        (Some("on"), Some("off"), Some("linear"))
+    );
+    let plan = plan(&f, Err("no URDF".into()));
+    let ids: Vec<&str> = plan.iter().map(|p| p.id.as_str()).collect();
+    assert_eq!(ids, ["7", "8", "9", "10", "11", "12"]);
+    let fig12 = figure_of(&plan, "12");
+    assert!(fig12.title.contains("joint s1"), "{}", fig12.title);
+    let band: Vec<f64> = fig12.panels[0].hlines.iter().map(|m| m.at).collect();
+    assert_eq!(band, [-0.3, 0.4]);
+    let fig11 = figure_of(&plan, "11");
+    assert!(fig11.panels[0]
+        .lines
+        .iter()
+        .all(|l| l.y.iter().all(|e| (e - 0.01).abs() < 1e-12)));
+    let fig9 = plan.iter().find(|p| p.id == "9").unwrap();
+    assert!(fig9.caption.contains("joint s1"), "{}", fig9.caption);
+    assert!(figure_of(&plan, "9").panels[0].title.contains("variant on"));
+}
+
+#[test]
+fn the_wide_deadzone_pair_gets_figs_11b_and_12b_with_its_own_band() {
+    let t = table(&ALL, &["ee_error"], 100);
+    let f = folder(
+        "renamed",
+        &[
+            ("nn_compensated", t.clone()),
+            ("nn_uncompensated", t.clone()),
+            ("pd", t.clone()),
+            ("wide_on", t.clone()),
+            ("wide_off", t),
+        ],
+    );
+    let plan = plan(&f, Err("no URDF".into()));
+    let ids: Vec<&str> = plan.iter().map(|p| p.id.as_str()).collect();
+    assert_eq!(ids, ["7", "8", "9", "10", "11", "12", "11b", "12b"]);
+    let fig12b = figure_of(&plan, "12b");
+    for p in &fig12b.panels {
+        let band: Vec<f64> = p.hlines.iter().map(|m| m.at).collect();
+        assert_eq!(band, [-5.0, 5.0], "{}", p.title);
+    }
+    assert!(
+        fig12b.panels[0].title.contains("wide_on") && fig12b.panels[1].title.contains("wide_off")
+    );
+}
+
+#[test]
+fn an_unknown_scenario_shows_its_worst_joint_and_every_joint() {
+    let t = tracking_table(30, &|j| if j == "left_s1" { 0.2 } else { 0.01 });
+    let mut f = folder_with("mine", &[("a", t)], "");
+    f.variants[0]
+        .metrics
+        .insert("tracking_rmse".into(), serde_json::json!([0.01, 0.2]));
+    let plan = plan(&f, Err("unused".into()));
+    let ids: Vec<&str> = plan.iter().map(|p| p.id.as_str()).collect();
+    assert_eq!(ids, ["S1", "S2", "S3"]);
+    assert!(figure_of(&plan, "S1").title.contains("joint s1"));
+    assert_eq!(figure_of(&plan, "S3").panels[0].lines.len(), J.len());
+}
+
+#[test]
+fn an_observer_comparison_shows_the_joint_in_contact() {
+    let toml = format!(
+        "{OBSERVERS}[[plant.environment.joint_springs]]\njoints = [\"left_s1\"]\nt_start = 1.0\nt_end = 2.0\n"
+    );
+    let t = table(&ALL, &[], 40);
+    let f = folder_with("renamed", &[("learned", t.clone()), ("momentum", t)], &toml);
+    assert_eq!(
+        crate::experiment::Experiment::of(&f),
+        crate::experiment::Experiment::Admittance { mujoco: false }
+    );
+    let plan = plan(&f, Err("unused".into()));
+    for id in ["17", "18", "19", "20"] {
+        assert!(figure_of(&plan, id).title.contains("s1"), "Fig {id}");
+    }
+    // Fig 20's bound is that joint's: half_range inf on s1, so none is drawn.
+    assert!(figure_of(&plan, "20").panels[0].hlines.is_empty());
 }

@@ -24,7 +24,7 @@
 //! [admittance]               # optional: admittance model and reference saturation
 //! [task_admittance]          # optional, instead: the hand's admittance (linear, angular, axes, IK)
 //! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz, input_filter_hz, warmup
-//! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache
+//! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache; identify (momentum and hybrid on the identified arm)
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [health]                   # optional: thresholds of the run's health rules (max_hand_error = 0.04 m, ...)
@@ -98,7 +98,7 @@ pub struct SineSpec {
 }
 
 /// The desired joint trajectory `q_d(t)`: a pose (`offset`, or `waypoints` to move between
-/// poses) plus sines.
+/// poses) plus sines; or, alone, an `excitation` designed for identification.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrajectorySpec {
@@ -115,6 +115,16 @@ pub struct TrajectorySpec {
     /// Sinusoidal components.
     #[serde(default)]
     pub sines: Vec<SineSpec>,
+    /// An excitation for identification (docs/method.md section 8; `admittance excite`): a
+    /// finite Fourier series per joint, periodic, from rest, inside the arm's position,
+    /// velocity and acceleration limits, optimised for the condition number of the base
+    /// regressor; designed when the scenario is assembled. Its table takes
+    /// `ExcitationSettings` (`period`, `harmonics`, `acceleration_limit`,
+    /// `position_margin`, `seed`, `iterations`, and `duration`/`rate_hz` of the samples the
+    /// design is scored on). Exclusive with `offset`, `waypoints` and `sines`. Default:
+    /// absent.
+    #[serde(default)]
+    pub excitation: Option<admittance_dynamics::ExcitationSettings>,
 }
 
 /// Where the training of a learned observer comes from (`[observer.training]`).
@@ -163,13 +173,21 @@ pub struct TrainingSpec {
     /// Whether to use and fill the cache.
     #[serde(default = "default_true")]
     pub cache: bool,
+    /// Identify the arm on the training data (docs/method.md section 8; settings chosen on
+    /// the validation data) and run `momentum` and `hybrid` on the identification: the
+    /// momentum observer's nominal model is the identified one with its joint terms, and
+    /// the hybrid's network learns what the identification misses. The file is written to
+    /// the cache folder. Default false: the nominal model is the URDF with
+    /// `observer.nominal_inertia_scale`.
+    #[serde(default)]
+    pub identify: bool,
 }
 
 fn default_nodes() -> usize {
-    1000
+    admittance_learning::broad::DEFAULT_NODES
 }
 fn default_friction_scales() -> Vec<f64> {
-    vec![0.01, 0.05, 0.2]
+    admittance_learning::broad::DEFAULT_FRICTION_SCALES.to_vec()
 }
 fn default_training_seed() -> u64 {
     admittance_learning::broad::BroadConfig::default().seed

@@ -47,6 +47,21 @@ impl Scenario {
     }
 
     fn validate_trajectory(&self, joints: &[String], out: &mut Vec<Invalid>) {
+        let t = &self.trajectory;
+        if t.excitation.is_some()
+            && (t.offset.is_some() || !t.waypoints.is_empty() || !t.sines.is_empty())
+        {
+            out.push(
+                Invalid::new(
+                    "trajectory.excitation",
+                    "is the whole trajectory: it does not go with offset, waypoints or sines",
+                )
+                .hint("keep either the excitation table or the pose and sines"),
+            );
+        }
+        if let Some(Err(e)) = t.excitation.as_ref().map(|e| e.validate()) {
+            out.push(Invalid::new("trajectory.excitation", e.to_string()));
+        }
         let n = joints.len();
         if let Some(offset) = &self.trajectory.offset {
             if offset.len() != n {
@@ -172,6 +187,7 @@ impl Scenario {
 
     /// The scenario's own part of `[observer]`: the training of the learned observers.
     fn validate_training(&self, out: &mut Vec<Invalid>) {
+        self.validate_identify(out);
         if self.observer.kind.is_learned() {
             match &self.observer.training {
                 None => out.push(
@@ -211,6 +227,38 @@ impl Scenario {
                     }
                 }
             }
+        }
+    }
+}
+
+impl Scenario {
+    /// `[observer.training] identify = true`: the identified model replaces the URDF, so
+    /// neither a given identification file nor a scaled URDF goes with it.
+    fn validate_identify(&self, out: &mut Vec<Invalid>) {
+        let o = &self.observer;
+        if !o.training.as_ref().is_some_and(|t| t.identify) {
+            return;
+        }
+        if o.identification.is_some() {
+            out.push(
+                Invalid::new(
+                    "observer.training.identify",
+                    "and observer.identification both give the nominal model",
+                )
+                .hint("keep one: identify = true fits it on the training data, identification = FILE reads it"),
+            );
+        }
+        if o.nominal_inertia_scale != 1.0 {
+            out.push(
+                Invalid::new(
+                    "observer.nominal_inertia_scale",
+                    format!(
+                        "is {}; with observer.training.identify = true the nominal model is the identified one",
+                        o.nominal_inertia_scale
+                    ),
+                )
+                .hint("remove nominal_inertia_scale (default 1)"),
+            );
         }
     }
 }

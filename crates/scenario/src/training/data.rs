@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use admittance_dynamics::{Identification, Model};
+use admittance_dynamics::Identification;
 use admittance_learning::broad::fnv1a64;
 
 use super::SimulateData;
@@ -186,7 +186,7 @@ pub(super) fn arrays(
     data: &FreeMotionData,
     key: &str,
     arm_joints: &[String],
-    nominal: Option<&Model>,
+    residual_of: Option<&Identification>,
     input_filter_hz: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), ScenarioError> {
     if data.joints != arm_joints {
@@ -208,9 +208,8 @@ pub(super) fn arrays(
                 None,
             )
         })?;
-    if let Some(model) = nominal {
-        // A URDF model is an identification without joint terms: one residual rule.
-        Identification::from_model(model.clone())
+    if let Some(nominal) = residual_of {
+        nominal
             .subtract_from(&x, &mut y)
             .map_err(|e| ctx.err(key, format!("nominal model: {e}"), None))?;
     }

@@ -10,11 +10,14 @@
 
 mod cache;
 mod data;
+mod identified;
+
+pub(crate) use identified::{identified_nominal, IdentifiedNominal};
 
 use std::path::Path;
 use std::time::Instant;
 
-use admittance_dynamics::Model;
+use admittance_dynamics::{Identification, Model};
 use admittance_learning::broad::{
     check_budget, fit, fnv1a64, ArmIdentity, BroadConfig, BroadModel, DataSettings, Dataset,
     FitSize, FrictionFeatures, TrainingTarget, ValidationSplit, WidthRule,
@@ -100,6 +103,25 @@ fn validation_series(
     Some(TimeSeries { columns, rows })
 }
 
+/// The model whose residual a hybrid's network learns: the momentum observer's nominal
+/// model.
+pub(crate) enum Nominal<'a> {
+    /// The URDF with its inertias scaled by `observer.nominal_inertia_scale`.
+    Urdf(&'a Model),
+    /// An identification (`[observer.training] identify = true`).
+    Identified(&'a IdentifiedNominal),
+}
+
+impl Nominal<'_> {
+    fn identification(&self) -> Identification {
+        match self {
+            // A URDF model is an identification without joint terms: one residual rule.
+            Nominal::Urdf(model) => Identification::from_model((*model).clone()),
+            Nominal::Identified(nominal) => nominal.identification.clone(),
+        }
+    }
+}
+
 /// The network of a learned or hybrid observer, from the cache or trained now. `nominal`
 /// is the momentum observer's nominal model for `hybrid`.
 pub(crate) fn observer_network(
@@ -107,7 +129,7 @@ pub(crate) fn observer_network(
     scenario: &Scenario,
     scenario_file: &Path,
     arm: &Model,
-    nominal: Option<&Model>,
+    nominal: Option<Nominal<'_>>,
     options: &RunOptions,
     simulate: SimulateData<'_>,
 ) -> Result<TrainedNetwork, ScenarioError> {
@@ -127,14 +149,11 @@ pub(crate) fn observer_network(
     )?;
     let config = BroadConfig {
         nodes: spec.nodes,
-        friction: if spec.friction_features {
-            FrictionFeatures {
-                columns: (n..2 * n).collect(),
-                scales: spec.friction_scales.clone(),
-            }
-        } else {
-            FrictionFeatures::none()
-        },
+        friction: FrictionFeatures::for_observer(
+            n,
+            spec.friction_features,
+            Some(spec.friction_scales.clone()),
+        ),
         seed: spec.seed,
         widths: WidthRule::Knn {
             k: spec.width_neighbours,
@@ -143,10 +162,12 @@ pub(crate) fn observer_network(
         ..BroadConfig::default()
     };
     // The key: data identities, the target, every fit setting.
-    let target = match (scenario.observer.kind, nominal) {
-        (ObserverKind::Hybrid, Some(_)) => {
+    let hybrid = scenario.observer.kind == ObserverKind::Hybrid;
+    let target = match (hybrid, &nominal) {
+        (true, Some(Nominal::Urdf(_))) => {
             format!("hybrid:{}", scenario.observer.nominal_inertia_scale)
         }
+        (true, Some(Nominal::Identified(i))) => format!("hybrid-identified:{:016x}", i.checksum),
         _ => "learned".to_string(),
     };
     let key_text = format!(
@@ -174,9 +195,12 @@ pub(crate) fn observer_network(
     let settings = DataSettings {
         input_filter_hz: filter,
         validation: ValidationSplit::SeparateData,
-        target: match (scenario.observer.kind, nominal) {
-            (ObserverKind::Hybrid, Some(_)) => TrainingTarget::NominalResidual {
+        target: match (hybrid, &nominal) {
+            (true, Some(Nominal::Urdf(_))) => TrainingTarget::NominalResidual {
                 nominal_inertia_scale: scenario.observer.nominal_inertia_scale,
+            },
+            (true, Some(Nominal::Identified(i))) => TrainingTarget::IdentifiedResidual {
+                checksum: i.checksum,
             },
             _ => TrainingTarget::FreeMotionTorque,
         },
@@ -192,8 +216,16 @@ pub(crate) fn observer_network(
         )
         .map_err(|e| ctx.err("observer.training.nodes", e.to_string(), None))?;
     }
+    let residual_of = nominal.as_ref().map(Nominal::identification);
     let validation = load_data(ctx, &val_src, arm_joints, options, simulate)?;
-    let (xv, yv) = arrays(ctx, &validation, val_src.key, arm_joints, nominal, filter)?;
+    let (xv, yv) = arrays(
+        ctx,
+        &validation,
+        val_src.key,
+        arm_joints,
+        residual_of.as_ref(),
+        filter,
+    )?;
     if spec.cache {
         if let Some(mut hit) = read_cache(&model_path, &meta_path, &key_text, &identity, &settings)
         {
@@ -205,7 +237,14 @@ pub(crate) fn observer_network(
 
     let label = variant.unwrap_or("base");
     let train = load_data(ctx, &train_src, arm_joints, options, simulate)?;
-    let (x, y) = arrays(ctx, &train, train_src.key, arm_joints, nominal, filter)?;
+    let (x, y) = arrays(
+        ctx,
+        &train,
+        train_src.key,
+        arm_joints,
+        residual_of.as_ref(),
+        filter,
+    )?;
     let train_set = Dataset::new(&x, &y, 3 * n, n).map_err(learn_err)?;
     let val_set = Dataset::new(&xv, &yv, 3 * n, n).map_err(learn_err)?;
     options.report(label, Stage::Train, 0, 1);

@@ -33,6 +33,16 @@ class CosimConfig:
     duration: float = 30.0
     training_duration: float = 450.0
     validation_duration: float = 90.0
+    # The free-motion recordings' desired motion: "excitation" (adm.excitation, the optimised
+    # motion of `admittance excite`, a seed drawn from each recording's generator) or
+    # "multisine" (the hand-made multi-sine about the pose, before issue 22).
+    training_motion: str = "excitation"
+    # The hybrid observer's model: "identified" (adm.identify on the training recording,
+    # settings chosen on the validation recording; the residual network learns what the
+    # identification leaves: the recipe of docs/experiments.md) or "nominal" (the URDF with
+    # nominal_inertia_scale, as before issue 22). The momentum variant stays on the nominal
+    # model: the baseline that knows no friction.
+    hybrid_nominal: str = "identified"
     nodes: int = 1000
     friction_scale: float = 1.0
     seed: int = 1
@@ -108,12 +118,42 @@ def _multisine(m, q0, rng, duration, dt, spread=0.6):
     return at
 
 
+def _excitation(m, rng, duration, dt):
+    """``adm.excitation`` (the optimised motion of ``admittance excite``) sampled at the
+    control rate, with a seed drawn from ``rng``; ``at(t)`` as ``_multisine``'s."""
+    seed = int(rng.integers(1, 2**31 - 1))
+    # The excitation repeats equal periods of at most 10 s (adm.excitation's rule): one
+    # period is optimised and sampled, then repeated (equal to the whole to 1e-14; a long
+    # recording does not wait minutes for 1 kHz samples, nor Ctrl-C with it).
+    period = duration / max(math.ceil(duration / 10.0), 1)
+    steps = period / dt
+    if abs(steps - round(steps)) > 1e-6:
+        period = duration  # periods of a fractional number of steps: all of it
+    e = adm.excitation(m, period, seed=seed, period=period, rate_hz=1.0 / dt)
+    q, v, a = (np.asarray(e[k]) for k in ("q", "qdot", "qddot"))
+    per = len(q) - 1
+
+    def at(t):
+        k = int(round(t / dt))
+        k = k % per if period < duration else min(k, per)
+        return q[k], v[k], a[k]
+
+    return at
+
+
 def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration):
-    """Free motion under PD + nominal gravity on a multi-sine: the sensor signals, as a dict
-    for ``adm.train``."""
+    """Free motion under PD + nominal gravity on the excitation (``cfg.training_motion``:
+    ``"excitation"``, the default, or ``"multisine"``): the sensor signals, as a dict for
+    ``adm.train``."""
     n = m.n
     steps = int(round(duration / cfg.dt))
-    desired = _multisine(m, q0, rng, duration, cfg.dt)
+    motion = getattr(cfg, "training_motion", "excitation")
+    if motion == "excitation":
+        desired = _excitation(m, rng, duration, cfg.dt)
+    elif motion == "multisine":
+        desired = _multisine(m, q0, rng, duration, cfg.dt)
+    else:
+        raise ValueError(f"training_motion {motion!r}: choose \"excitation\" or \"multisine\"")
     arm.set_q(desired(0.0)[0])
     ctl = adm.PdController(m, pd_config)
     sensors = Sensors(n, cfg, rng)
@@ -140,22 +180,37 @@ def home_pose(m):
     return np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), 0.0)
 
 
+class Networks(dict):
+    """The networks by variant name; ``identification``: the identified arm the hybrid's
+    residual was trained on (``None``: the nominal model)."""
+
+    identification = None
+
+
 def train_networks(m, m_nominal, data, validation, cfg):
     """The three networks of experiment B: the paper's (no friction inputs), with
-    friction-shaped inputs, and the hybrid's residual on the nominal model."""
+    friction-shaped inputs, and the hybrid's residual on the identification (or on the
+    nominal model, ``cfg.hybrid_nominal``)."""
+    hybrid_nominal = getattr(cfg, "hybrid_nominal", "identified")
+    if hybrid_nominal not in ("identified", "nominal"):
+        raise ValueError(f"hybrid_nominal {hybrid_nominal!r}: choose \"identified\" or \"nominal\"")
+    identification = None
+    if hybrid_nominal == "identified":
+        identification = adm.identify(data, m, validation=validation, input_filter_hz=cfg.input_filter_hz)
     common = dict(
         input_filter_hz=cfg.input_filter_hz,
         validation=validation,
         seed=cfg.seed,
         width_scale=cfg.width_scale,
     )
-    nets = {
-        "learned": adm.train(data, m, cfg.nodes, **common),
-        "learned_friction": adm.train(data, m, cfg.nodes, friction_features=True, **common),
-        "hybrid": adm.train(
-            data, m, cfg.nodes, friction_features=True, nominal=m_nominal, **common
+    nets = Networks(
+        learned=adm.train(data, m, cfg.nodes, **common),
+        learned_friction=adm.train(data, m, cfg.nodes, friction_features=True, **common),
+        hybrid=adm.train(
+            data, m, cfg.nodes, friction_features=True, nominal=m_nominal if identification is None else identification, **common
         ),
-    }
+    )
+    nets.identification = identification
     return nets
 
 
@@ -165,7 +220,10 @@ def make_observer(variant, m_nominal, nets, cfg):
     if variant == "momentum":
         return adm.MomentumObserver(m_nominal, gain=cfg.momentum_gain)
     if variant == "hybrid":
-        return adm.HybridObserver(m_nominal, nets["hybrid"], gain=cfg.momentum_gain)
+        # On the model its residual network was trained on.
+        identification = getattr(nets, "identification", None)
+        nominal = m_nominal if identification is None else identification
+        return adm.HybridObserver(nominal, nets["hybrid"], gain=cfg.momentum_gain)
     return None  # oracle
 
 

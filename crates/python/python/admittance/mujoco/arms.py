@@ -1,0 +1,60 @@
+"""``python -m admittance.mujoco.arms``: every single-arm description of example-robot-data
+on the MuJoCo plant, trained on 60 s of excitation, evaluated on other motion with pushes
+and in free motion (the module ``_arms`` says how; docs/experiments.md has the table)."""
+
+import argparse
+import sys
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(
+        prog="python -m admittance.mujoco.arms",
+        description="Every single-arm URDF of example-robot-data on MuJoCo: identification, the paper's "
+        "network, the friction-input network and the hybrid, trained on excitation, judged on other motion.",
+    )
+    p.add_argument("--out", default="runs/mujoco_arms", help="folder for results.json and table.md")
+    p.add_argument("--arms", help="comma-separated subset (default: all)")
+    p.add_argument("--training-duration", type=float, default=60.0)
+    p.add_argument("--evaluation-duration", type=float, default=30.0)
+    p.add_argument("--validation-duration", type=float, default=20.0, help="seconds of a third excitation (seed 3) that chooses every setting")
+    p.add_argument("--nodes", type=int, default=1000)
+    p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
+    p.add_argument("--friction-scale", type=float, default=1.0)
+    p.add_argument("--input-filter-hz", type=float, default=10.0)
+    p.add_argument("--estimate-cutoff-hz", type=float, default=5.0, help="the estimate's low-pass, as the co-simulation's (5)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
+    a = p.parse_args(argv)
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        print("admittance.mujoco.arms: needs MuJoCo: pip install './crates/python[mujoco]'", file=sys.stderr)
+        return 2
+    from ._arms import ARMS, EXCLUDED, ArmsConfig, run_all
+
+    if a.list:
+        for name, (rel, _, _) in ARMS.items():
+            print(f"included  {name:<16} {rel}")
+        for what, why in EXCLUDED.items():
+            print(f"excluded  {what}: {why}")
+        return 0
+    arms = [x for x in (a.arms.split(",") if a.arms else ARMS) if x]
+    unknown = [x for x in arms if x not in ARMS]
+    if unknown:
+        p.error(f"--arms: unknown {unknown}; choose among {list(ARMS)}")
+    cfg = ArmsConfig(
+        out=a.out, arms=arms, training_duration=a.training_duration, evaluation_duration=a.evaluation_duration, validation_duration=a.validation_duration,
+        nodes=a.nodes, push_force=a.push_force, friction_scale=a.friction_scale,
+        input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed,
+    )
+    try:
+        run_all(cfg, log=lambda s: print(s, file=sys.stderr, flush=True))
+    except FileNotFoundError as e:
+        print(f"admittance.mujoco.arms: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {a.out}/results.json and {a.out}/table.md", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
