@@ -37,6 +37,11 @@ pub struct ChainArgs {
 }
 
 impl ChainArgs {
+    /// The URDF file.
+    pub fn urdf_path(&self) -> &std::path::Path {
+        &self.urdf
+    }
+
     /// The loader's options from the flags.
     fn options(&self) -> Result<UrdfOptions, CliError> {
         let mut lock = Vec::new();

@@ -1,16 +1,17 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
 //! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
 //! `import` from a rosbag2 bag), identify the arm (`excite`, `identify`, `evaluate`), query an
-//! arm's dynamics (`dynamics`, `model`).
+//! arm's dynamics (`dynamics`, `model`) and a starting set of its gains (`gains`).
 //!
 //! Exit codes:
 //!
 //! | code | meaning |
 //! |---|---|
 //! | 0 | success |
-//! | 1 | a run failed (writing outputs, a numerical failure in training, the report) |
+//! | 1 | a run failed (a variant diverged or a metric is not finite, writing outputs, a numerical failure in training, the report) |
 //! | 2 | bad command-line arguments (usage) |
 //! | 3 | a bad input file: URDF, scenario, free-motion data, model, run folder, bag, profile |
+//! | 4 | `run`: the run finished and wrote its folder, but a variant broke a health rule of severity failure (docs/outputs.md, "Health") |
 //! | 130 | interrupted (Ctrl-C): one line says so; nothing of the user's was changed |
 //!
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,
@@ -19,6 +20,7 @@
 mod dynamics_cmd;
 mod evaluate_cmd;
 mod excite_cmd;
+mod gains_cmd;
 mod identify_cmd;
 mod import_cmd;
 mod interrupt;
@@ -46,6 +48,8 @@ enum Command {
     Dynamics(dynamics_cmd::DynamicsArgs),
     /// Print a readable summary of a URDF chain: joints, limits, masses.
     Model(dynamics_cmd::ModelArgs),
+    /// Print a starting set of controller and admittance gains for an arm, from its model (TOML).
+    Gains(gains_cmd::GainsArgs),
     /// Run a scenario (every variant) and write its run folder: summary.json, CSVs, figures,
     /// report.md, report.html, recording.mcap.
     Run(run_cmd::RunArgs),
@@ -131,6 +135,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Dynamics(args) => dynamics_cmd::dynamics(&args),
         Command::Model(args) => dynamics_cmd::model(&args),
+        Command::Gains(args) => gains_cmd::gains(&args),
         Command::Run(args) => run_cmd::run(&args),
         Command::List(args) => list_cmd::list(&args),
         Command::Report(args) => report_cmd::report(&args),

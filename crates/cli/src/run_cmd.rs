@@ -3,11 +3,16 @@
 
 use std::path::PathBuf;
 
+use admittance_runfolder::health;
 use admittance_scenario::{run_scenario_variants, RunError, RunOptions};
 use clap::Args;
 
 use crate::progress::{self, RunProgress, Spinner};
 use crate::CliError;
+
+/// Exit code of a run that finished and wrote its folder but broke a health rule of
+/// severity failure (hand error, effort saturation, estimate beyond the effort limit, ...).
+pub const EXIT_HEALTH_FAILURE: u8 = 4;
 
 #[derive(Args)]
 pub struct RunArgs {
@@ -125,6 +130,22 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             eprintln!("admittance: warning: {w}");
         }
     }
+    // The health verdicts of every variant (docs/outputs.md, "Health"), worst first.
+    let mut healthy = 0;
+    for (variant, h) in &summary.health {
+        if h.verdicts.is_empty() {
+            healthy += 1;
+        }
+        for v in &h.verdicts {
+            eprintln!("admittance: {}", health::console_line(variant, v));
+        }
+    }
+    if !args.quiet && healthy == summary.health.len() {
+        eprintln!(
+            "health: every variant passed every rule ({} checked; thresholds in summary.json)",
+            healthy
+        );
+    }
     if !summary.failures.is_empty() {
         if args.json {
             crate::write_stdout(&format!(
@@ -146,7 +167,18 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             "{}\n",
             serde_json::to_string_pretty(&summary.json).unwrap_or_default()
         ));
-    } else if !args.quiet {
+    }
+    if !summary.health_failures.is_empty() {
+        return Err(CliError {
+            code: EXIT_HEALTH_FAILURE,
+            message: format!(
+                "the run finished but broke {} health rule(s) of severity failure (the `failure:` lines above; exit {EXIT_HEALTH_FAILURE}); the run folder {} holds everything (summary.json's `health`, report.md)",
+                summary.health_failures.len(),
+                summary.out_dir.display()
+            ),
+        });
+    }
+    if !args.json && !args.quiet {
         eprintln!(
             "wrote {} ({:.1} s): open {} in a browser",
             summary.out_dir.display(),

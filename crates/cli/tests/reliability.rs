@@ -4,8 +4,9 @@
 //! each with a wall-clock timeout and checks the contract:
 //!
 //! - no panic (exit 101 or "panicked" on stderr), no abort or signal, no hang;
-//! - an exit code of 0, 1, 2 or 3 only; errors (2, 3) in one or two lines;
-//! - exit 0 only with a complete summary whose metrics are finite (a few may be null);
+//! - an exit code of 0, 1, 2, 3 or 4 (a run that finished but broke a health rule) only;
+//!   errors (2, 3) in one or two lines;
+//! - exit 0 (and 4) only with a complete summary whose metrics are finite (a few may be null);
 //! - nothing the user owns is lost: a sentinel file beside the output survives, and a
 //!   folder of the user's given as `--out` is refused and kept.
 //!
@@ -149,7 +150,7 @@ fn violation(o: &Outcome, out: Option<&Path>) -> Option<String> {
     let Some(code) = o.code else {
         return Some("killed by a signal (abort?)".into());
     };
-    if !(0..=3).contains(&code) {
+    if !(0..=4).contains(&code) {
         return Some(format!("exit {code}: {}", o.stderr.trim()));
     }
     let errors: Vec<&str> = o
@@ -167,7 +168,7 @@ fn violation(o: &Outcome, out: Option<&Path>) -> Option<String> {
             o.stderr
         ));
     }
-    if code == 0 {
+    if code == 0 || code == 4 {
         if let Some(dir) = out {
             return summary_problem(&dir.join("summary.json"));
         }
@@ -241,7 +242,7 @@ fn non_finite(v: &serde_json::Value) -> Option<String> {
 struct Family {
     name: &'static str,
     runs: usize,
-    codes: [usize; 5],
+    codes: [usize; 6],
     violations: Vec<String>,
     keep: tempfile::TempDir,
 }
@@ -251,7 +252,7 @@ impl Family {
         Family {
             name,
             runs: 0,
-            codes: [0; 5],
+            codes: [0; 6],
             violations: Vec::new(),
             keep: tempfile::Builder::new()
                 .prefix(&format!("admittance-reliability-{name}-"))
@@ -275,8 +276,8 @@ impl Family {
             );
         }
         match o.code {
-            Some(c @ 0..=3) => self.codes[c as usize] += 1,
-            _ => self.codes[4] += 1,
+            Some(c @ 0..=4) => self.codes[c as usize] += 1,
+            _ => self.codes[5] += 1,
         }
         if let Some(p) = problem {
             self.violations
@@ -286,7 +287,7 @@ impl Family {
 
     fn finish(self) {
         eprintln!(
-            "{:<22} runs {:>4}  exit 0: {:>4}  1: {:>4}  2: {:>4}  3: {:>4}  other: {:>3}  violations: {}",
+            "{:<22} runs {:>4}  exit 0: {:>4}  1: {:>4}  2: {:>4}  3: {:>4}  4: {:>4}  other: {:>3}  violations: {}",
             self.name,
             self.runs,
             self.codes[0],
@@ -294,6 +295,7 @@ impl Family {
             self.codes[2],
             self.codes[3],
             self.codes[4],
+            self.codes[5],
             self.violations.len()
         );
         if !self.violations.is_empty() {

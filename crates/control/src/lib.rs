@@ -45,6 +45,7 @@ mod baselines;
 mod config;
 mod controller;
 mod error;
+pub mod gains;
 mod hybrid;
 mod learned;
 mod momentum;

@@ -6,6 +6,8 @@
 //! * [`LoopConfig`]: the serde settings (controller, joint or task admittance, the
 //!   estimate, the rate), each with its unit and default, checked once
 //!   ([`LoopConfig::problems`]), every error a [`LoopError`] at its dotted key.
+//! * [`HealthMonitor`]: the divergence rule, checked every step (the rules on a finished
+//!   run's metrics are `admittance_runfolder::health`).
 //! * The real signal chain: [`SignalChain`] (low-pass and numerical differentiation of the
 //!   encoder angles, the command through the same filter) into a [`Measurement`];
 //!   [`InputConditioner`], the observers' second input filter; [`LowPass`].
@@ -50,6 +52,7 @@ mod closed_loop;
 mod conditioning;
 mod config;
 mod error;
+mod health;
 mod parts;
 mod signal;
 mod stage;
@@ -63,6 +66,9 @@ pub use config::{
     ObserverConfig, ObserverKind, DEFAULT_CONTROL_RATE_HZ,
 };
 pub use error::LoopError;
+pub use health::{
+    Divergence, HealthMonitor, ESTIMATE_FACTOR, MAX_ANGLE, MIN_SPEED_BOUND, SPEED_FACTOR,
+};
 pub use parts::{Compliance, EstimateSource, LoopController};
 pub use signal::{LowPass, Measurement};
 pub use stage::{ObserverStage, ObserverStageSettings};

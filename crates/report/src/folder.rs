@@ -39,6 +39,10 @@ pub struct RunFolder {
     /// Warnings recorded with the run (`summary.json`'s `warnings`: how the arm's
     /// description was read).
     pub warnings: Vec<String>,
+    /// The health verdicts recorded with the run (`summary.json`'s `health`), per variant;
+    /// `None` for a folder written before they were recorded (the report then judges the
+    /// metrics with the same rules and default thresholds).
+    pub health: Option<Vec<(String, admittance_runfolder::health::VariantHealth)>>,
     /// The scenario file as run (`scenario.toml`), when present and readable.
     pub scenario_toml: Option<toml::Table>,
     /// Every variant's settings as the run applied them (`settings.json`); `None` in a
@@ -226,6 +230,7 @@ impl RunFolder {
             joints,
             variants,
             warnings: string_list(summary.get(summary::KEY_WARNINGS)).unwrap_or_default(),
+            health: admittance_runfolder::health::read(&summary),
             scenario_toml,
             settings,
             free_motion,

@@ -399,6 +399,7 @@ mod tests {
                 })
                 .collect(),
             warnings: Vec::new(),
+            health: None,
             scenario_toml: Some(toml.parse().unwrap()),
             settings: None,
             free_motion: Vec::new(),

@@ -8,6 +8,8 @@
 //! * [`summary`]: the format marker and version of `summary.json`, and [`summary::is_run_folder`],
 //!   which tells a folder this tool wrote from anything else (a user's folder is never
 //!   replaced by `run --out`);
+//! * [`health`]: the rules a run is judged by, their thresholds and the verdicts recorded in
+//!   `summary.json`;
 //! * [`settings`]: `settings.json`, every variant's settings as the run applied them (the
 //!   deadzone, environment windows, evaluation window, saturation bounds, kinds);
 //! * [`write_atomic`]: files are written through a temporary sibling and a rename;
@@ -20,6 +22,7 @@
 
 pub mod columns;
 pub mod files;
+pub mod health;
 pub mod metrics;
 pub mod settings;
 pub mod summary;

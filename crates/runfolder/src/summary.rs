@@ -32,6 +32,8 @@ pub const KEY_VARIANTS: &str = "variants";
 pub const KEY_VARIANT_ORDER: &str = "variant_order";
 /// Key of the load warnings of the arm's description (a list of strings).
 pub const KEY_WARNINGS: &str = "warnings";
+/// Key of the health verdicts of every variant (`crate::health::summary_value`).
+pub const KEY_HEALTH: &str = "health";
 /// Key of the plant that produced the run, when it is not this project's simulator: the
 /// Python co-simulation writes `"plant": "mujoco"` (same metric names as experiment B).
 pub const KEY_PLANT: &str = "plant";

@@ -92,6 +92,7 @@ pub(crate) fn assemble(
     }
     let sim_err = |e: SimError| ctx.err("plant", e.to_string(), None);
     let plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
+    let gain_warnings = gain_warning_lines(&ctx, &scenario, &model, &trajectory);
     let sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
         .map_err(sim_err)?;
     let mut loop_config = scenario.loop_config_for(path);
@@ -135,7 +136,12 @@ pub(crate) fn assemble(
                 .clone(),
             identification_cached: i.cached,
         }),
-        arm_warnings: model.warnings().iter().map(|w| w.to_string()).collect(),
+        arm_warnings: model
+            .warnings()
+            .iter()
+            .map(|w| w.to_string())
+            .chain(gain_warnings)
+            .collect(),
     })
 }
 
@@ -171,6 +177,66 @@ fn identified_nominal_of(
         checksum: admittance_learning::broad::fnv1a64(&bytes),
         cached: true,
     }))
+}
+
+/// The gain rules' warnings of a resolved, valid scenario (`Scenario::gain_warnings`) over
+/// 200 poses of its desired motion, with the plant's viscous friction, each located at its
+/// key and line (`file:line: key ...: problem; hint: ...`).
+fn gain_warning_lines(
+    ctx: &Ctx<'_>,
+    scenario: &Scenario,
+    model: &Model,
+    trajectory: &Trajectory,
+) -> Vec<String> {
+    let n = model.nq();
+    let poses: Vec<Vec<f64>> = (0..200)
+        .map(|k| {
+            let (mut q, mut v, mut a) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            trajectory.eval(scenario.duration * k as f64 / 199.0, &mut q, &mut v, &mut a);
+            q
+        })
+        .collect();
+    // The plant's friction entries, the last one naming a joint (or "*") winning.
+    let mut damping = vec![0.0; n];
+    for f in &scenario.plant.friction {
+        for (j, name) in model.joint_names().enumerate() {
+            if f.joint == "*" || f.joint == name {
+                damping[j] = f.viscous;
+            }
+        }
+    }
+    scenario
+        .gain_warnings(model, &poses, &damping)
+        .into_iter()
+        .map(|w| ctx.err(&w.key, w.message, w.hint.as_deref()).to_string())
+        .collect()
+}
+
+/// The gain rules' warnings of one variant of a scenario file, as a run prints them
+/// (without running it): each names the file, line, key, joint and the value to use.
+pub fn gain_warnings(
+    source: &ScenarioSource,
+    path: &Path,
+    variant: Option<&str>,
+) -> Result<Vec<String>, ScenarioError> {
+    let ctx = Ctx { source, variant };
+    let scenario: Scenario = source.resolve(variant)?;
+    let model = Model::from_urdf_file_with(&scenario.urdf_path(path), &scenario.arm.urdf_options())
+        .map_err(|e| ctx.err("arm.urdf", e.to_string(), None))?;
+    let joints: Vec<String> = model.joint_names().map(String::from).collect();
+    let mut problems = scenario.validate(&joints);
+    if problems.is_empty() {
+        problems = scenario.validate_for_arm(&model);
+    }
+    if !problems.is_empty() {
+        return Err(source.invalid(variant, &problems));
+    }
+    let trajectory = Trajectory::new(
+        &scenario.trajectory,
+        &joints,
+        &crate::spec::mid_range(&model),
+    );
+    Ok(gain_warning_lines(&ctx, &scenario, &model, &trajectory))
 }
 
 /// A loop error as a scenario error at the same key, located in the file.

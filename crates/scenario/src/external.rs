@@ -13,7 +13,7 @@ use admittance_sim::StepRecord;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};
 use crate::hand::HandKinematics;
-use crate::health::Divergence;
+use admittance_loop::Divergence;
 use crate::metrics::ObserverTrainingMetrics;
 use crate::recorder::{Recorder, Row};
 use crate::runner::{finish, VariantRun};

@@ -7,8 +7,8 @@ use admittance_loop::{ClosedLoop, LoopStatus, Measurement};
 use admittance_sim::StepRecord;
 
 use crate::hand::HandStats;
-use crate::health::Health;
 use crate::metrics::{median, rms, JointStats, ObserverStats, VariantMetrics};
+use admittance_loop::HealthMonitor as Health;
 
 /// Controller step times kept for the median (at most; evenly strided over the run).
 const MAX_TIMINGS: usize = 200_000;

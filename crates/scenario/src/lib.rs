@@ -38,7 +38,6 @@ mod free_motion;
 mod gather;
 mod hand;
 mod hand_paths;
-mod health;
 mod limits;
 mod metrics;
 mod node_events;
@@ -54,17 +53,18 @@ mod spec;
 mod training;
 mod trajectory;
 
+pub use admittance_loop::Divergence;
+pub use assemble::gain_warnings;
 pub use error::{Invalid, ScenarioError};
 pub use external::{Desired, ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
-pub use health::Divergence;
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
 pub use robot::{robot_loop, RobotLoop};
 pub use run_folder::{
     check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants,
-    write_external_run_folder, write_series_csv, RunError, RunSummary,
+    write_external_run_folder, write_series_csv, RunError, RunSummary, STOPPING_RULES,
 };
 pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use admittance_runfolder::settings::RunSettings;
 use admittance_runfolder::summary::{self, OutTarget};
+use admittance_runfolder::health::{self, Severity, VariantHealth};
 use admittance_runfolder::{files, writer};
 use serde_json::{json, Value};
 
@@ -32,6 +33,11 @@ pub struct RunSummary {
     /// Variants that failed although the folder was written: diverged, or a metric that
     /// is not finite. A run with failures must not be reported as a success.
     pub failures: Vec<String>,
+    /// Every variant's health verdicts (`summary.json`'s `health`), in variant order.
+    pub health: Vec<(String, VariantHealth)>,
+    /// The variants that finished but broke a health rule of severity failure (hand error,
+    /// effort saturation, ...; not counting `failures`), one line each.
+    pub health_failures: Vec<String>,
 }
 
 /// A failure of a whole run.
@@ -189,7 +195,9 @@ pub fn run_scenario_variants(
     let first = source.resolve::<Scenario>(selected[0].as_deref())?;
     let evaluation_start = first.evaluation_start;
     crate::hand_paths::across_variants(&mut runs, evaluation_start);
-    let summary = summary_json(&scenario_name, &runs);
+    let judged: Vec<(String, VariantHealth)> =
+        runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
+    let summary = summary_json(&scenario_name, &runs, &judged);
     let settings = RunSettings::new(
         first.duration,
         evaluation_start,
@@ -219,13 +227,31 @@ pub fn run_scenario_variants(
         std::fs::write(&summary_path, text).map_err(io_err(&summary_path))?;
         finish(partial)
     })?;
-    let failures = runs.iter().flat_map(failures).collect();
+    let mut failures = Vec::new();
+    let mut health_failures = Vec::new();
+    for (name, h) in &judged {
+        for v in h
+            .verdicts
+            .iter()
+            .filter(|v| v.severity == Severity::Failure)
+        {
+            if v.rule == "divergence" {
+                failures.push(format!("variant `{name}` {}", v.message));
+            } else if STOPPING_RULES.contains(&v.rule.as_str()) {
+                failures.push(format!("variant `{name}`: {}", v.message));
+            } else {
+                health_failures.push(format!("variant `{name}`: {}", v.message));
+            }
+        }
+    }
     Ok(RunSummary {
         scenario: scenario_name,
         json: summary,
         variants: runs,
         out_dir: out_dir.to_path_buf(),
         failures,
+        health: judged,
+        health_failures,
     })
 }
 
@@ -262,7 +288,9 @@ pub fn write_external_run_folder(
         let s: Scenario = source.resolve(Some(&run.name))?;
         scenario_name = s.name;
     }
-    let mut summary = summary_json(&scenario_name, runs);
+    let judged: Vec<(String, VariantHealth)> =
+        runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
+    let mut summary = summary_json(&scenario_name, runs, &judged);
     if let Value::Object(map) = &mut summary {
         for (k, v) in extra {
             map.entry(k).or_insert(v);
@@ -278,52 +306,37 @@ pub fn write_external_run_folder(
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
         std::fs::write(&summary_path, text).map_err(io_err(&summary_path))
     })?;
-    let failures = runs.iter().flat_map(failures).collect();
+    let failures = judged
+        .iter()
+        .flat_map(|(name, h)| {
+            h.verdicts
+                .iter()
+                .filter(|v| v.severity == Severity::Failure)
+                .map(move |v| format!("variant `{name}`: {}", v.message))
+        })
+        .collect();
     Ok((summary, failures))
 }
 
-/// What went wrong in a variant: a divergence, or a metric that is not finite (the JSON
-/// `null` of a NaN; `external_torque_nrmse` is `null` by design without contact).
-fn failures(run: &VariantRun) -> Vec<String> {
-    let mut out = Vec::new();
+/// The rules whose failure means the run's numbers are not usable (exit 1 of `admittance
+/// run`), unlike the other failures, of a run that finished but did not work (exit 4).
+pub const STOPPING_RULES: [&str; 2] = ["divergence", "nonfinite_metric"];
+
+/// The health of one variant: `admittance_runfolder::health::assess` on its metrics, with
+/// the divergence's reason in its message.
+fn judge(run: &VariantRun) -> VariantHealth {
+    let metrics: serde_json::Map<String, Value> = run.metrics.to_map().into_iter().collect();
+    let mut verdicts = health::assess(&metrics, &run.joints, &run.health_settings);
     if let Some(d) = &run.divergence {
-        out.push(format!(
-            "variant `{}` diverged at t = {} s: {}",
-            run.name, d.time, d.reason
-        ));
-        return out;
-    }
-    fn finite(v: &Value) -> bool {
-        match v {
-            Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
-            Value::Array(a) => a.iter().all(finite),
-            Value::Object(o) => o.values().all(finite),
-            Value::Null => false,
-            _ => true,
+        for v in verdicts.iter_mut().filter(|v| v.rule == "divergence") {
+            v.message = format!("diverged at t = {} s: {}", d.time, d.reason);
         }
     }
-    for (k, v) in run.metrics.to_map() {
-        let may_be_null = matches!(
-            k.as_str(),
-            "external_torque_nrmse"
-                | "diverged_at"
-                | "wrench_estimate_rmse"
-                | "wrench_estimate_nrmse"
-                | "hand_compliance_error_rms"
-                | "hand_drift_after_release"
-        );
-        if !(finite(&v) || may_be_null && v.is_null()) {
-            out.push(format!(
-                "variant `{}`: metric `{k}` is not finite",
-                run.name
-            ));
-        }
-    }
-    out
+    VariantHealth::new(run.health_settings.clone(), verdicts)
 }
 
 /// `summary.json` of a run.
-fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
+fn summary_json(scenario: &str, runs: &[VariantRun], judged: &[(String, VariantHealth)]) -> Value {
     let variants: serde_json::Map<String, Value> = runs
         .iter()
         .map(|run| {
@@ -359,6 +372,10 @@ fn summary_json(scenario: &str, runs: &[VariantRun]) -> Value {
     if !warnings.is_empty() {
         out.insert(summary::KEY_WARNINGS.into(), json!(warnings));
     }
+    out.insert(
+        summary::KEY_HEALTH.into(),
+        health::summary_value(judged.iter().map(|(n, h)| (n.as_str(), h))),
+    );
     Value::Object(out)
 }
 

@@ -13,13 +13,13 @@ use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};
 use crate::hand::HandKinematics;
-use crate::health::Divergence;
 use crate::metrics::VariantMetrics;
 use crate::node_events::NodeEvents;
 use crate::progress::{RunOptions, Stage};
 use crate::recorder::{Recorder, Row};
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
+use admittance_loop::Divergence;
 
 /// The outcome of one variant.
 #[derive(Clone, Debug)]
@@ -42,8 +42,11 @@ pub struct VariantRun {
     pub observer_validation: Option<TimeSeries>,
     /// Why and when the variant stopped early, if it did.
     pub divergence: Option<Divergence>,
-    /// What the URDF loader accepted with a warning (`file:line: element: problem`).
+    /// What the URDF loader accepted with a warning (`file:line: element: problem`), then
+    /// the gain rules' warnings (`scenario:line: key ...: problem; hint: ...`).
     pub arm_warnings: Vec<String>,
+    /// The thresholds of the health rules for this variant (`[health]`).
+    pub health_settings: admittance_runfolder::health::HealthSettings,
     /// The variant's settings as the run applied them (`settings.json`).
     pub settings: admittance_runfolder::settings::VariantSettings,
 }
@@ -229,6 +232,7 @@ fn simulate_variant(
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
+    run.health_settings = scenario.health.clone();
     run.metrics.identification = identification;
     run.settings = settings;
     Ok(run)
@@ -275,6 +279,7 @@ pub(crate) fn finish(
         observer_validation,
         divergence: health.divergence,
         arm_warnings: Vec::new(),
+        health_settings: Default::default(),
         settings: Default::default(),
     })
 }

@@ -597,7 +597,7 @@ pub fn blocks(folder: &RunFolder, warnings: Vec<String>) -> Vec<Block<'static>> 
         });
     }
     if warnings.is_empty() {
-        let mut text = "No warnings: no divergence, limit, saturation or fault was recorded, every metric is finite and every sample was drawn.".to_string();
+        let mut text = "No warnings: every variant passed every health rule (summary.json's `health`: no divergence, hand error, saturation, limit or fault beyond its threshold), every metric is finite and every sample was drawn.".to_string();
         let missing: Vec<&str> = CHECKED
             .iter()
             .copied()

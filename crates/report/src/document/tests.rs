@@ -38,6 +38,7 @@ fn old_folder(scenario: &str, variants: Vec<Variant>, toml: &str) -> RunFolder {
         joints: JOINTS.iter().map(|s| s.to_string()).collect(),
         variants,
         warnings: Vec::new(),
+        health: None,
         scenario_toml: Some(toml.parse().unwrap()),
         settings: None,
         free_motion: Vec::new(),
@@ -152,7 +153,7 @@ fn every_problem_is_a_warning_at_the_top() {
         "diverged_at": 12.5,
         "q_limit_violation_fraction": [0.0, 0.032],
         "torque_saturation_fraction": [0.5, 0.0],
-        "estimate_saturation_fraction": [0.0, 0.001],
+        "estimate_saturation_fraction": [0.0, 0.002],
         "faults": 3,
         "stale_measurements": 7,
         "ee_error_rms": null,
@@ -166,14 +167,14 @@ fn every_problem_is_a_warning_at_the_top() {
     f.warnings.push("link `x` has no inertia".into());
     let top = opening(&f);
     for words in [
-        "`bad` **diverged** at t = 12.50 s",
-        "joints outside their joint limits for part of the run: s1 3.20 %",
-        "commanded at the effort limit for part of the run: s0 50.0 %",
-        "estimate beyond the effort limit for part of the run: s1 0.10 %",
-        "`bad`: 3 control steps with a controller fault",
-        "`bad`: 7 control steps with a stale encoder reading",
-        "not finite (null in summary.json): `ee_error_rms`, `tracking_rmse` of s1",
-        "the arm's description: link `x` has no inertia",
+        "`bad` **failed** `divergence`: diverged at t = 12.5 s",
+        "`bad` warning `joint_limits` on s1: left_s1 was outside its position limits 3.20 %",
+        "`bad` **failed** `effort_saturation` on s0: left_s0 commanded at its effort limit 50.00 %",
+        "`bad` **failed** `estimate_beyond_effort` on s1: the external-torque estimate of left_s1 exceeded the effort limit 0.20 %",
+        "`bad` warning `controller_faults`: 3 control steps with a controller fault",
+        "`bad` warning `stale_data`: 7 control steps with a stale (frozen or dropped) encoder reading",
+        "not finite (null in summary.json): `ee_error_rms`, `tracking_rmse` of left_s1",
+        "when the scenario loaded: link `x` has no inertia",
     ] {
         assert!(top.contains(words), "missing `{words}` in:\n{top}");
     }
@@ -185,7 +186,7 @@ fn every_problem_is_a_warning_at_the_top() {
     assert!(!top.contains("external_torque_nrmse"), "{top}");
     // The HTML has the same warnings, highlighted.
     let html = html(&f, &[], None);
-    assert!(html.contains("<div class=\"warnings\">") && html.contains("<b>diverged</b>"));
+    assert!(html.contains("<div class=\"warnings\">") && html.contains("<b>failed</b>"));
 }
 
 #[test]
@@ -292,7 +293,7 @@ fn each_experiment_has_its_opening() {
         "{top}"
     );
     assert!(
-        top.contains("q_r left its saturation bound on 2 samples"),
+        top.contains("`momentum` warning `reference_bound`: 2 samples x joints with q_r outside its saturation bound"),
         "{top}"
     );
     let mut mujoco = b.clone();

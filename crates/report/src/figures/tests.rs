@@ -77,6 +77,7 @@ fn folder_with(scenario: &str, variants: &[(&str, Table)], toml: &str) -> RunFol
             })
             .collect(),
         warnings: Vec::new(),
+        health: None,
         scenario_toml: Some(toml.parse().unwrap()),
         settings: None,
         free_motion: Vec::new(),

@@ -168,3 +168,68 @@ impl Scenario {
         out
     }
 }
+
+impl Scenario {
+    /// The gain rules of `admittance_control::gains` on this scenario's controller and
+    /// admittance, for `model` moving through `poses` (the desired motion, sampled) with the
+    /// plant's viscous friction `damping` per joint: one warning per joint and rule, at the
+    /// key to change, with the suggested value (after [`Scenario::validate`]).
+    pub fn gain_warnings(
+        &self,
+        model: &Model,
+        poses: &[Vec<f64>],
+        damping: &[f64],
+    ) -> Vec<Invalid> {
+        use admittance_control::gains;
+        use admittance_loop::{ControllerKind, ObserverKind};
+        let n = model.nq();
+        let joints: Vec<String> = model.joint_names().map(String::from).collect();
+        let inertia = gains::JointInertia::over(model, poses.iter().map(Vec::as_slice));
+        let limits = gains::LoopLimits {
+            control_rate_hz: self.plant.control_rate_hz,
+            velocity_filter_hz: self.plant.sensors.filter_cutoff_hz,
+            damping: damping.to_vec(),
+        };
+        let mut advice = Vec::new();
+        if self.controller.kind == ControllerKind::Neural {
+            let nn = &self.controller.neural;
+            if let (Some(k1), Some(k2)) = (per_joint(&nn.k1, n), per_joint(&nn.k2, n)) {
+                advice.extend(gains::check_feedback(
+                    "controller.neural.k2",
+                    &joints,
+                    &k1,
+                    &k2,
+                    &inertia,
+                    &limits,
+                ));
+            }
+        }
+        let estimating = !matches!(
+            self.observer.kind,
+            ObserverKind::None | ObserverKind::Oracle
+        );
+        if let Some(a) = self.admittance.as_ref().filter(|a| a.enabled && estimating) {
+            let c = &a.config;
+            if let (Some(d), Some(s)) = (per_joint(&c.damping, n), per_joint(&c.stiffness, n)) {
+                let m = c.inertia.as_ref().and_then(|m| per_joint(m, n));
+                advice.extend(gains::check_admittance(
+                    "admittance",
+                    &joints,
+                    &d,
+                    &s,
+                    m.as_deref(),
+                    self.observer.cutoff_hz,
+                ));
+            }
+        }
+        advice
+            .into_iter()
+            .map(|a| {
+                Invalid::new(a.key.clone(), a.message.clone()).hint(format!(
+                    "set {}[{}] ({}) to {} (`admittance gains --urdf FILE` prints a starting set for the arm)",
+                    a.key, a.index, a.joint, a.suggested
+                ))
+            })
+            .collect()
+    }
+}

@@ -27,6 +27,7 @@
 //! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache; identify (momentum and hybrid on the identified arm)
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
+//! [health]                   # optional: thresholds of the run's health rules (max_hand_error = 0.04 m, ...)
 //! [variants.NAME]            # overrides of any of the above, per variant
 //! ```
 
@@ -306,6 +307,11 @@ pub struct Scenario {
     /// Extra recordings.
     #[serde(default)]
     pub record: RecordSpec,
+    /// The thresholds the finished run is judged by (`[health]`, docs/outputs.md "Health":
+    /// hand error, effort saturation, estimate beyond the effort limit, stale data, joint
+    /// limits).
+    #[serde(default)]
+    pub health: admittance_runfolder::health::HealthSettings,
     /// Variant tables (read by [`super::ScenarioSource`], ignored here).
     #[serde(default, skip_serializing)]
     pub variants: Option<toml::Table>,

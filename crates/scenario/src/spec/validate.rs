@@ -16,6 +16,12 @@ impl Scenario {
         out.extend(self.loop_config().problems().into_iter().map(loop_problem));
         self.validate_dynamic_nodes(&mut out);
         self.validate_training(&mut out);
+        for (key, problem) in self.health.problems() {
+            out.push(
+                Invalid::new(format!("health.{key}"), problem)
+                    .hint("a threshold of the run's health rules (docs/outputs.md, \"Health\")"),
+            );
+        }
         if self.output.decimation == 0 {
             out.push(Invalid::new("output.decimation", "must be at least 1"));
         }

@@ -1,4 +1,6 @@
-//! Whether the physics of a run stayed meaningful (docs/outputs.md, "When a run fails"):
+//! Whether the physics of a run stayed meaningful, step by step (docs/outputs.md, "When a
+//! run fails"): the one divergence monitor of the scenario runner and of any other loop
+//! (the MuJoCo co-simulation). It counts,
 //! per joint, the share of time outside the position limits, with the command at the
 //! effort limit and with the estimate beyond it; and divergence, which stops a variant.
 //!
@@ -11,8 +13,11 @@
 //! * the external-torque estimate is not finite or exceeds `ESTIMATE_FACTOR x` the effort
 //!   limit.
 
+// Bounds are written `!(x <= bound)` on purpose: a NaN fails them.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use crate::Measurement;
 use admittance_dynamics::Model;
-use admittance_loop::Measurement;
 
 /// Largest meaningful angle (rad): about 160 turns.
 pub const MAX_ANGLE: f64 = 1.0e3;
@@ -32,8 +37,10 @@ pub struct Divergence {
     pub reason: String,
 }
 
-/// Per-joint counters of a run's health.
-pub(crate) struct Health {
+/// Per-joint counters of a run's health, fed once per control step ([`HealthMonitor::add`]);
+/// the rules that judge the finished run's metrics are `admittance_runfolder::health`.
+#[derive(Clone, Debug)]
+pub struct HealthMonitor {
     joints: Vec<String>,
     lower: Vec<f64>,
     upper: Vec<f64>,
@@ -43,10 +50,11 @@ pub(crate) struct Health {
     torque_saturated: Vec<usize>,
     estimate_saturated: Vec<usize>,
     steps: usize,
+    /// The first divergence, once one happened.
     pub divergence: Option<Divergence>,
 }
 
-impl Health {
+impl HealthMonitor {
     /// For the plant's model with its (scaled) effort limits.
     pub fn new(model: &Model, joints: &[String], effort: &[f64]) -> Self {
         let n = joints.len();
