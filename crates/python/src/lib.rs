@@ -32,6 +32,8 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The defaults every front end shares (declared once, in the learning crate).
+    m.add("DEFAULT_NODES", admittance_learning::broad::DEFAULT_NODES)?;
     m.add_class::<model::PyModel>()?;
     for f in [
         wrap_pyfunction!(model::rnea, m)?,

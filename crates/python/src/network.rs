@@ -350,7 +350,7 @@ impl PyNetwork {
 /// files' `[observer.training]` keys). The GIL is released while it reads and fits.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (data, m, nodes=1000, *, friction_features=false, friction_scales=None,
+#[pyo3(signature = (data, m, nodes=admittance_learning::broad::DEFAULT_NODES, *, friction_features=false, friction_scales=None,
     input_filter_hz=0.0, validation_fraction=None, validation=None, folds=5, seed=None,
     width_scale=2.0, width_neighbours=8, nominal=None))]
 pub fn train(
@@ -412,15 +412,7 @@ pub fn train(
     let defaults = BroadConfig::default();
     let config = BroadConfig {
         nodes,
-        friction: if friction_features {
-            FrictionFeatures {
-                columns: (n..2 * n).collect(),
-                scales: friction_scales
-                    .unwrap_or_else(|| FrictionFeatures::joint_velocities(n).scales),
-            }
-        } else {
-            FrictionFeatures::none()
-        },
+        friction: FrictionFeatures::for_observer(n, friction_features, friction_scales),
         seed: seed.unwrap_or(defaults.seed),
         cv_folds: folds,
         widths: WidthRule::Knn {

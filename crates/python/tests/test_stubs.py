@@ -16,6 +16,23 @@ def stub_tree():
     return ast.parse(STUBS.read_text())
 
 
+def stub_constants():
+    """Top-level annotated names of the stubs (``DEFAULT_NODES: int``), but ``__version__``."""
+    return {
+        node.target.id
+        for node in stub_tree().body
+        if isinstance(node, ast.AnnAssign) and not node.target.id.startswith("_")
+    }
+
+
+def module_constants():
+    return {
+        name
+        for name, value in vars(_admittance).items()
+        if not name.startswith("_") and not isinstance(value, type) and not callable(value)
+    }
+
+
 def stub_names():
     """Top-level classes and functions of the stubs, with each class's methods."""
     classes, functions = {}, set()
@@ -52,6 +69,7 @@ def test_the_stubs_name_every_class_and_function_of_the_module():
     classes, functions = module_names()
     assert sorted(stub_classes) == sorted(classes)
     assert sorted(stub_functions) == sorted(functions)
+    assert sorted(stub_constants()) == sorted(module_constants())
 
 
 def test_the_stubs_name_every_method_and_property():
@@ -65,7 +83,9 @@ def test_the_stubs_name_every_method_and_property():
 
 def test_the_package_exports_the_module_once():
     classes, functions = module_names()
-    assert sorted(admittance.__all__) == sorted([*classes, *functions, "__version__"])
+    assert sorted(admittance.__all__) == sorted(
+        [*classes, *functions, *module_constants(), "__version__"]
+    )
     for name in admittance.__all__:
         assert getattr(admittance, name) is getattr(_admittance, name)
 

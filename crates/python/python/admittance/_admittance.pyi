@@ -24,6 +24,8 @@ Config = Mapping[str, Any]
 FreeMotionData = Union[StrPath, Mapping[str, ArrayLike]]
 
 __version__: str
+#: Gaussian nodes of an observer's network unless told otherwise (the paper's 1000).
+DEFAULT_NODES: int
 
 class Model:
     """A serial arm loaded from a URDF: the chain from a base link to a tip link.
@@ -503,7 +505,7 @@ class Network:
 def train(
     data: FreeMotionData,
     m: Model,
-    nodes: int = 1000,
+    nodes: int = DEFAULT_NODES,
     *,
     friction_features: bool = False,
     friction_scales: Optional[Sequence[float]] = None,

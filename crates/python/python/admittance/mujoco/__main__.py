@@ -3,6 +3,8 @@
 import argparse
 import sys
 
+import admittance as adm
+
 #: What the co-simulation needs beyond the package, and the one line that says how to get it.
 MISSING_MUJOCO = (
     "admittance.mujoco: the co-simulation needs MuJoCo, which is not installed; "
@@ -40,7 +42,7 @@ def _main(argv):
     p.add_argument("--duration", type=float, default=30.0, help="seconds of the admittance experiment per variant (30)")
     p.add_argument("--training-duration", type=float, default=450.0, help="seconds of free-motion data (450, as experiment B)")
     p.add_argument("--validation-duration", type=float, default=90.0)
-    p.add_argument("--nodes", type=int, default=1000, help="nodes of each network (1000)")
+    p.add_argument("--nodes", type=int, default=adm.DEFAULT_NODES, help=f"nodes of each network ({adm.DEFAULT_NODES})")
     p.add_argument("--width-scale", type=float, default=2.0, help="Gaussian widths: this times the mean distance to the nearest centres (2, as admittance train)")
     p.add_argument("--push-force", type=float, default=10.0, help="peak of the scripted push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0, help="scales the unknown joint friction, damping and armature (1)")

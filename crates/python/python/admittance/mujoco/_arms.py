@@ -93,7 +93,7 @@ class ArmsConfig:
     training_seed: int = 1
     evaluation_seed: int = 2
     validation_seed: int = 3
-    nodes: int = 1000
+    nodes: int = adm.DEFAULT_NODES
     friction_scale: float = 1.0
     push_force: float = 10.0  # N, peak of each push at the hand
     pushes: int = 4

@@ -47,7 +47,7 @@ class CosimConfig:
     # model: the baseline that knows no friction; momentum_identified runs on the
     # identification.
     hybrid_nominal: str = "identified"
-    nodes: int = 1000
+    nodes: int = adm.DEFAULT_NODES
     friction_scale: float = 1.0
     seed: int = 1
     dt: float = 1e-3
