@@ -1,7 +1,7 @@
 //! The DDS side (ros2-client on RustDDS, no ROS install): the bridge node and the fake arm.
 //!
 //! QoS: the JointState subscription is best-effort (it matches a best-effort or a reliable
-//! publisher, as `ros2 topic echo --qos-reliability best_effort` does), keep-last 100; the
+//! publisher, as `ros2 topic echo --qos-reliability best_effort` does), keep-last 1000; the
 //! outputs are published reliably, keep-last 100, volatile.
 
 use std::collections::BTreeMap;
@@ -89,9 +89,11 @@ fn node(context: &Context, name: &str) -> Result<Node, String> {
 const JOINT_STATE_TYPE: (&str, &str) = ("sensor_msgs", "JointState");
 const WRENCH_STAMPED_TYPE: (&str, &str) = ("geometry_msgs", "WrenchStamped");
 
-/// Best-effort, keep-last 100: the sensor-data input.
+/// Best-effort, keep-last 1000: the sensor-data input. The deep queue keeps every message
+/// through a stall of the bridge's thread of up to a second at 1 kHz (the observer wants
+/// every sample, late rather than never).
 fn input_qos() -> QosProfile {
-    QosProfile::subscription_default().history(History::KeepLast { depth: 100 })
+    QosProfile::subscription_default().history(History::KeepLast { depth: 1000 })
 }
 
 /// Reliable, keep-last `depth`: the outputs.
