@@ -1,7 +1,8 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
 //! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
 //! `import` from a rosbag2 bag), identify the arm (`excite`, `identify`, `evaluate`), query an
-//! arm's dynamics (`dynamics`, `model`).
+//! arm's dynamics (`dynamics`, `model`), and run the observer on a ROS 2 robot's topics
+//! (`ros2`, built with the `ros2` feature: crates/ros2, docs/ros2.md).
 //!
 //! Exit codes:
 //!
