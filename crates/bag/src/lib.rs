@@ -78,6 +78,6 @@ mod source;
 pub use error::{fmt_ns, BagError, CONVERT_COMMAND};
 pub use import::{import, import_to_csv, ImportOptions, Imported};
 pub use output::{check_destination, csv_text, write_csv, STAMP_COLUMN};
-pub use profile::{Profile, SignalSource};
+pub use profile::{Profile, SignalSource, FLOAT64_MULTI_ARRAY, JOINT_STATE, WRENCH_STAMPED};
 pub use report::{ImportReport, SignalReport, Skip, TimeBase, TopicCount};
 pub use resample::Table;

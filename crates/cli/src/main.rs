@@ -1,7 +1,9 @@
 //! The `admittance` command: run the paper's experiments (`run`, `list`, `report`),
 //! train the learned observer (`train`, `grow`) on free-motion data (recorded on a real arm:
 //! `import` from a rosbag2 bag), identify the arm (`excite`, `identify`, `evaluate`), query an
-//! arm's dynamics (`dynamics`, `model`) and a starting set of its gains (`gains`).
+//! arm's dynamics (`dynamics`, `model`), a starting set of its gains (`gains`), and run the
+//! observer on a ROS 2 robot's topics (`ros2`, built with the `ros2` feature: crates/ros2,
+//! docs/ros2.md).
 //!
 //! Exit codes:
 //!
@@ -69,6 +71,17 @@ enum Command {
     Evaluate(evaluate_cmd::EvaluateArgs),
     /// Free-motion training data (CSV) from a rosbag2 MCAP bag recorded on a real arm.
     Import(import_cmd::ImportArgs),
+    /// ROS 2 without ROS: the observer on a robot's JointState topic, the estimate published
+    /// (docs/ros2.md).
+    #[cfg(feature = "ros2")]
+    Ros2(admittance_ros2::cli::Ros2Args),
+    /// ROS 2 without ROS (docs/ros2.md): not in this build (`--features ros2`).
+    #[cfg(not(feature = "ros2"))]
+    #[command(disable_help_flag = true)]
+    Ros2 {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true, hide = true)]
+        args: Vec<String>,
+    },
 }
 
 /// A failure with its exit code and a short message.
@@ -145,6 +158,15 @@ fn main() -> ExitCode {
         Command::Identify(args) => identify_cmd::identify_cmd(&args),
         Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
         Command::Import(args) => import_cmd::import(&args),
+        #[cfg(feature = "ros2")]
+        Command::Ros2(args) => admittance_ros2::cli::run(&args).map_err(|f| CliError {
+            code: f.code,
+            message: f.message,
+        }),
+        #[cfg(not(feature = "ros2"))]
+        Command::Ros2 { .. } => Err(CliError::usage(
+            "this admittance was built without ROS 2: build it with `cargo build --release -p admittance-cli --features ros2`, or use `cargo build --release -p admittance-ros2` (target/release/admittance-ros2 takes the same arguments); docs/ros2.md",
+        )),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

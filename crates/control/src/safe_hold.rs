@@ -42,7 +42,8 @@ pub struct SafeHoldConfig {
     #[serde(default = "default_stale_steps")]
     pub stale_steps: u32,
     /// Joint `i` is expected to move when its reference speed `|q_ref'_i|` exceeds this
-    /// speed (rad/s); default 0.3. Choose `N` and this speed so that
+    /// speed (rad/s), or when its reading was moving faster than this when it last changed
+    /// (the change divided by the periods since the change before); default 0.3. Choose `N` and this speed so that
     /// `stale_velocity * N * dt` is well above the encoder quantisation: a slowly moving
     /// joint legitimately repeats its quantised angle for a few steps, and a joint held by
     /// static friction at a reversal repeats it while its reference moves on (defaults:
@@ -90,8 +91,9 @@ impl Default for SafeHoldConfig {
 /// estimate. [`finish`](SafeHold::finish) adds non-finite law outputs.
 ///
 /// **Staleness**, per joint: each step whose finite `q_i` is bit-identical to the previous
-/// sample while joint `i` is expected to move (see [`SafeHoldConfig::stale_velocity`])
-/// increments the joint's counter; any change, or no expected motion before the counter
+/// sample while joint `i` is expected to move (see [`SafeHoldConfig::stale_velocity`]: its
+/// reference is fast, or its reading was moving fast when it last changed) increments the
+/// joint's counter; any change, or no expected motion before the counter
 /// reaches `N` ([`SafeHoldConfig::stale_steps`]), resets it. The fault names the first joint
 /// whose counter is at least `N` and lasts until that joint's reading changes.
 #[derive(Clone, Debug)]
@@ -109,6 +111,13 @@ pub struct SafeHold {
     has_last_q: bool,
     /// Per joint: consecutive identical samples while motion was expected.
     identical: Vec<u32>,
+    /// Per joint: valid samples since the reading last changed.
+    since_change: Vec<u32>,
+    /// Per joint: whether the reading moved faster than `stale_velocity` at its last change.
+    /// A joint that was moving cannot stop within a period short of an impact, so a reading
+    /// that then repeats is suspect even when the reference slows meanwhile (the observer
+    /// reads a frozen encoder as a contact, and the admittance model slows the reference).
+    moving_at_change: Vec<bool>,
     faults: u64,
     last_fault: Option<Fault>,
 }
@@ -134,6 +143,8 @@ impl SafeHold {
             last_q: vec![0.0; n],
             has_last_q: false,
             identical: vec![0; n],
+            since_change: vec![0; n],
+            moving_at_change: vec![false; n],
             faults: 0,
             last_fault: None,
         })
@@ -174,6 +185,8 @@ impl SafeHold {
         self.has_hold = false;
         self.has_last_q = false;
         self.identical.fill(0);
+        self.since_change.fill(0);
+        self.moving_at_change.fill(false);
         self.faults = 0;
         self.last_fault = None;
     }
@@ -212,7 +225,7 @@ impl SafeHold {
                 joint,
             });
         }
-        self.update_staleness(input.q, input.qdot_ref);
+        self.update_staleness(input.q, input.qdot_ref, dt);
         if self.stale_steps > 0 {
             if let Some(joint) = self.identical.iter().position(|&c| c >= self.stale_steps) {
                 return Err(Fault::StaleMeasurement {
@@ -244,13 +257,24 @@ impl SafeHold {
         Ok(())
     }
 
-    fn update_staleness(&mut self, q: &[f64], qdot_ref: &[f64]) {
+    fn update_staleness(&mut self, q: &[f64], qdot_ref: &[f64], dt: f64) {
         let fast = |x: f64| x.is_finite() && x.abs() > self.stale_velocity;
         for i in 0..self.identical.len() {
-            // The reference, not the measured velocity: a filtered velocity lags, and at a
-            // reversal the encoder legitimately repeats while it still reads fast.
-            let expected = fast(qdot_ref[i]);
             let same = self.has_last_q && q[i].to_bits() == self.last_q[i].to_bits();
+            if self.has_last_q && !same {
+                // The reading's speed over its last change: the change over the periods
+                // since the change before (a coarse encoder's single count after a long
+                // plateau is slow, a fine encoder's counts every period are fast).
+                let periods = f64::from(self.since_change[i]) + 1.0;
+                self.moving_at_change[i] = fast((q[i] - self.last_q[i]) / (periods * dt));
+                self.since_change[i] = 0;
+            } else if self.has_last_q {
+                self.since_change[i] = self.since_change[i].saturating_add(1);
+            }
+            // The reference, not the filtered measured velocity: that lags, and at a
+            // reversal the encoder legitimately repeats while it still reads fast. Or the
+            // reading itself was moving fast when it froze.
+            let expected = fast(qdot_ref[i]) || self.moving_at_change[i];
             // Once stale, a joint stays stale until its reading changes: the reference may
             // slow down meanwhile (the loop is holding), which must not release the hold.
             let latched = self.stale_steps > 0 && self.identical[i] >= self.stale_steps;

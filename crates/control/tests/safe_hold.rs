@@ -291,6 +291,50 @@ fn one_frozen_joint_and_short_dropouts_are_stale_and_named() {
     }
 }
 
+/// A frozen reading of a joint that was moving is stale even when its reference slows
+/// meanwhile (in the loop a frozen encoder reads like a contact to the observer, and the
+/// admittance model slows the reference: 40 frozen periods at 0.49 rad/s went unreported);
+/// a joint that slows to rest and stays there is not.
+#[test]
+fn a_joint_frozen_while_moving_is_stale_though_its_reference_slows() {
+    let model = two_link();
+    for mut c in controllers(&model) {
+        let mut tau = [0.0; 2];
+        for k in 400..500 {
+            assert!(c.step(&Sample::at(k).input(), 1e-3, &mut tau).is_ok());
+        }
+        let frozen = Sample::at(500).q[1];
+        let mut stale = Vec::new();
+        for k in 500..530 {
+            let mut s = Sample::at(k);
+            s.q[1] = frozen;
+            // The reference of the frozen joint stops at once.
+            s.qdot_ref[1] = 0.0;
+            if let Some(Fault::StaleMeasurement { joint, .. }) =
+                c.step(&s.input(), 1e-3, &mut tau).fault()
+            {
+                assert_eq!(joint, 1);
+                stale.push(k);
+            }
+        }
+        assert_eq!(stale, (505..530).collect::<Vec<_>>(), "{}", c.name());
+
+        // Slowing to rest (speed falling linearly to zero over 200 periods) with the
+        // reference at rest, then resting: no fault.
+        c.reset();
+        let q0 = Sample::at(0).q.clone();
+        for k in 0..400 {
+            let mut s = Sample::at(0);
+            let t = (k.min(200)) as f64 * 1e-3;
+            s.q[1] = q0[1] + 0.5 * (t - t * t / 0.4);
+            s.qdot_ref = vec![0.0; 2];
+            s.q_ref = s.q.clone();
+            let status = c.step(&s.input(), 1e-3, &mut tau);
+            assert!(status.is_ok(), "{} at {k}: {status:?}", c.name());
+        }
+    }
+}
+
 #[test]
 fn a_robot_at_rest_is_not_stale() {
     // Identical samples with no motion expected (zero reference and measured velocity) are fine.

@@ -1,0 +1,425 @@
+//! The bridge's logic without DDS: one `sensor_msgs/JointState` in, one step of the loop
+//! (the observer, the admittance model and the controller of a scenario variant, built as
+//! `adm_create` builds them), the estimate out as a `JointState` (effort: the external joint
+//! torques, Franka's `external_joint_torques` convention) and a `WrenchStamped`.
+//!
+//! The same [`Bridge::process`] runs inside the DDS loop ([`crate::node`]) and offline
+//! ([`offline`]), so the published estimate and an offline run over the same messages come
+//! from the same code.
+
+use std::path::PathBuf;
+
+use admittance_bag::msgs::{Header, JointState, Vector3, Wrench, WrenchStamped};
+use admittance_bag::{Profile, JOINT_STATE, WRENCH_STAMPED};
+use admittance_ffi::{LoopSettings, RustLoop, StepInput, StepReport};
+
+/// The axes of the published wrench.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum WrenchFrame {
+    /// The arm's base link (`frame_id` = the base link's name), as Franka's
+    /// `external_wrench_in_base_frame`.
+    Base,
+    /// The tip link (`frame_id` = the tip link's name).
+    Tip,
+}
+
+/// What a bridge is built from.
+#[derive(Clone, Debug)]
+pub struct BridgeConfig {
+    /// The scenario file (`[arm]`, `[observer]`, `[admittance]`, `[controller]`, the rate).
+    pub scenario: PathBuf,
+    /// The variant, if any.
+    pub variant: Option<String>,
+    /// `KEY=VALUE` overrides (the CLI's `--set`).
+    pub overrides: Vec<String>,
+    /// Which topic and fields give `q`, `qdot`, `tau` (a bag profile).
+    pub profile: Profile,
+    /// The message's joint names in the arm's chain order, when they differ from the URDF's
+    /// (else the profile's `joints`, else the URDF's names).
+    pub joints: Option<Vec<String>>,
+    /// The axes of the published wrench.
+    pub wrench_frame: WrenchFrame,
+}
+
+/// Where the bridge reads each signal: the profile's JointState topic and fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputMap {
+    /// The topic (`/franka_robot_state_broadcaster/measured_joint_states`).
+    pub topic: String,
+    /// The field giving `q`.
+    pub q_field: String,
+    /// The field giving `qdot`; `None`: differentiated from `q` by the signal chain.
+    pub qdot_field: Option<String>,
+    /// The field giving `tau`.
+    pub tau_field: String,
+    /// Per joint, multiplies the `tau` field (a motor current's torque constant), in chain
+    /// order.
+    pub tau_scale: Option<Vec<f64>>,
+}
+
+impl InputMap {
+    /// The mapping a profile describes, or an error naming the profile's key when the bridge
+    /// cannot subscribe to it (another message type, signals on different topics).
+    pub fn from_profile(profile: &Profile) -> Result<Self, String> {
+        let p = &profile.name;
+        let mut sources = vec![("q", &profile.q)];
+        if let Some(s) = &profile.qdot {
+            sources.push(("qdot", s));
+        }
+        sources.push(("tau", &profile.tau));
+        for (role, s) in &sources {
+            if s.type_name != JOINT_STATE {
+                return Err(format!(
+                    "profile {p}: [{role}] reads `{}` ({}): the bridge subscribes to one {JOINT_STATE} topic; use a copy of the profile whose q, qdot and tau come from a JointState topic{}",
+                    s.topic,
+                    s.type_name,
+                    if profile.name == "lbr" {
+                        " (lbr_fri_ros2_stack: /lbr/joint_states, effort = measured torque)"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+            if *role != "q" && s.topic != profile.q.topic {
+                return Err(format!(
+                    "profile {p}: [{role}] topic `{}` is not [q]'s `{}`: the bridge subscribes to one topic",
+                    s.topic, profile.q.topic
+                ));
+            }
+        }
+        Ok(Self {
+            topic: profile.q.topic.clone(),
+            q_field: profile.q.field.clone(),
+            qdot_field: profile.qdot.as_ref().map(|s| s.field.clone()),
+            tau_field: profile.tau.field.clone(),
+            tau_scale: profile.tau.torque_constant.clone(),
+        })
+    }
+}
+
+/// Why a message was not stepped: the message is skipped and counted, the bridge goes on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputError {
+    /// A short fixed reason (the statistics count by it).
+    pub reason: &'static str,
+    /// The topic, field, joint and values concerned, in words.
+    pub detail: String,
+}
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.reason, self.detail)
+    }
+}
+
+/// One message's step: when it was, and the loop's report.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stepped {
+    /// The message's header stamp (ns since the epoch).
+    pub stamp_ns: i64,
+    /// The loop's time: seconds since the first stepped message's stamp.
+    pub time: f64,
+    /// The loop's flags and fault.
+    pub report: StepReport,
+}
+
+/// The bridge: a loop and the mapping of one JointState topic onto it.
+pub struct Bridge {
+    rust_loop: RustLoop,
+    map: InputMap,
+    /// The names the messages use, in chain order.
+    names: Vec<String>,
+    /// Per chain joint, its index in the last message's `name` (cached while the names
+    /// repeat).
+    index: Vec<usize>,
+    cached_names: Vec<String>,
+    q: Vec<f64>,
+    qdot: Vec<f64>,
+    tau: Vec<f64>,
+    first_stamp: Option<i64>,
+    last_stamp: Option<i64>,
+    base_link: String,
+    tip_link: String,
+    wrench_frame: WrenchFrame,
+}
+
+impl Bridge {
+    /// Builds the loop from the scenario (errors name the file, line and key) and checks the
+    /// profile against it.
+    pub fn new(config: &BridgeConfig) -> Result<Self, String> {
+        let map = InputMap::from_profile(&config.profile)?;
+        let rust_loop = RustLoop::new(&LoopSettings {
+            scenario: &config.scenario,
+            variant: config.variant.as_deref(),
+            overrides: config.overrides.iter().map(String::as_str).collect(),
+            wrench_damping: Some(0.0),
+        })?;
+        let n = rust_loop.dof();
+        let names: Vec<String> = match (&config.joints, &config.profile.joints) {
+            (Some(j), _) => j.clone(),
+            (None, Some(j)) => j.clone(),
+            (None, None) => rust_loop.joints().to_vec(),
+        };
+        if names.len() != n {
+            return Err(format!(
+                "{} joint names given ({}) for the {n} joints of {}'s [arm] chain ({})",
+                names.len(),
+                names.join(", "),
+                config.scenario.display(),
+                rust_loop.joints().join(", ")
+            ));
+        }
+        if let Some(k) = &map.tau_scale {
+            if k.len() != n {
+                return Err(format!(
+                    "profile {}: [tau] torque_constant has {} values for {n} joints",
+                    config.profile.name,
+                    k.len()
+                ));
+            }
+        }
+        let model = rust_loop.model();
+        let base_link = model.base_link.clone();
+        let tip_link = model.tip().name.clone();
+        Ok(Self {
+            map,
+            names,
+            index: vec![0; n],
+            cached_names: Vec::new(),
+            q: vec![0.0; n],
+            qdot: vec![0.0; n],
+            tau: vec![0.0; n],
+            first_stamp: None,
+            last_stamp: None,
+            base_link,
+            tip_link,
+            wrench_frame: config.wrench_frame,
+            rust_loop,
+        })
+    }
+
+    /// The topic and fields read.
+    pub fn input_map(&self) -> &InputMap {
+        &self.map
+    }
+
+    /// The message joint names, in chain order.
+    pub fn joint_names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// The loop's control period (s): the period the messages are expected at.
+    pub fn dt(&self) -> f64 {
+        self.rust_loop.dt()
+    }
+
+    /// The loop (its estimate, reference, wrench of the last step).
+    pub fn rust_loop(&self) -> &RustLoop {
+        &self.rust_loop
+    }
+
+    /// The `frame_id` of the published wrench.
+    pub fn wrench_frame_id(&self) -> &str {
+        match self.wrench_frame {
+            WrenchFrame::Base => &self.base_link,
+            WrenchFrame::Tip => &self.tip_link,
+        }
+    }
+
+    /// Maps the message's names onto the chain (cached while they repeat).
+    fn map_names(&mut self, msg: &JointState) -> Result<(), InputError> {
+        if msg.name == self.cached_names {
+            return Ok(());
+        }
+        for (k, wanted) in self.names.iter().enumerate() {
+            match msg.name.iter().position(|n| n == wanted) {
+                Some(i) => self.index[k] = i,
+                None => {
+                    self.cached_names.clear();
+                    return Err(InputError {
+                        reason: "joint missing",
+                        detail: format!(
+                            "{}: field `name` has no joint `{wanted}` (names: [{}]; the arm's joints: [{}]; pass --joints or a profile's `joints` when the robot names them otherwise)",
+                            self.map.topic,
+                            msg.name.join(", "),
+                            self.names.join(", ")
+                        ),
+                    });
+                }
+            }
+        }
+        self.cached_names.clone_from(&msg.name);
+        Ok(())
+    }
+
+    /// Gathers one field into `dst` in chain order, checking its length and values.
+    fn gather(
+        topic: &str,
+        msg: &JointState,
+        field: &str,
+        index: &[usize],
+        names: &[String],
+        dst: &mut [f64],
+    ) -> Result<(), InputError> {
+        let values: &[f64] = match field {
+            "position" => &msg.position,
+            "velocity" => &msg.velocity,
+            "effort" => &msg.effort,
+            other => {
+                return Err(InputError {
+                    reason: "unknown field",
+                    detail: format!("{topic}: JointState has no field `{other}`"),
+                })
+            }
+        };
+        if values.len() != msg.name.len() {
+            return Err(InputError {
+                reason: "wrong length",
+                detail: format!(
+                    "{topic}: field `{field}` has {} values for {} names",
+                    values.len(),
+                    msg.name.len()
+                ),
+            });
+        }
+        for (k, &i) in index.iter().enumerate() {
+            let v = values[i];
+            if !v.is_finite() {
+                return Err(InputError {
+                    reason: "non-finite value",
+                    detail: format!("{topic}: field `{field}` of joint `{}` is {v}", names[k]),
+                });
+            }
+            dst[k] = v;
+        }
+        Ok(())
+    }
+
+    /// One message: checks it (names, lengths, finite values, a stamp after the previous
+    /// one), steps the loop at the message's stamp (seconds since the first stepped
+    /// message), and returns what was stepped. A rejected message changes nothing.
+    pub fn process(&mut self, msg: &JointState) -> Result<Stepped, InputError> {
+        let stamp = msg.header.stamp.nanos();
+        let topic = &self.map.topic;
+        if msg.header.stamp.is_zero() {
+            return Err(InputError {
+                reason: "zero stamp",
+                detail: format!(
+                    "{topic}: header.stamp is zero: the observer is timed by the stamps"
+                ),
+            });
+        }
+        if let Some(last) = self.last_stamp {
+            if stamp <= last {
+                return Err(InputError {
+                    reason: "stamp not increasing",
+                    detail: format!(
+                        "{topic}: header.stamp {} ns is not after the previous message's {} ns",
+                        stamp, last
+                    ),
+                });
+            }
+        }
+        self.map_names(msg)?;
+        let topic = self.map.topic.as_str();
+        Self::gather(topic, msg, &self.map.q_field, &self.index, &self.names, &mut self.q)?;
+        if let Some(f) = &self.map.qdot_field {
+            Self::gather(topic, msg, f, &self.index, &self.names, &mut self.qdot)?;
+        }
+        Self::gather(topic, msg, &self.map.tau_field, &self.index, &self.names, &mut self.tau)?;
+        if let Some(k) = &self.map.tau_scale {
+            for (t, k) in self.tau.iter_mut().zip(k) {
+                *t *= k;
+            }
+        }
+        let first = *self.first_stamp.get_or_insert(stamp);
+        self.last_stamp = Some(stamp);
+        let time = (stamp - first) as f64 * 1e-9;
+        let report = self.rust_loop.step(&StepInput {
+            time,
+            q: &self.q,
+            qdot: self.map.qdot_field.is_some().then_some(&self.qdot[..]),
+            tau: Some(&self.tau),
+            desired: None,
+        });
+        Ok(Stepped {
+            stamp_ns: stamp,
+            time,
+            report,
+        })
+    }
+
+    /// The external joint torques of the last step as a JointState (names in chain order,
+    /// `effort` the estimate, position and velocity empty), stamped with `header`.
+    pub fn torque_message(&self, header: &Header) -> JointState {
+        JointState {
+            header: header.clone(),
+            name: self.names.clone(),
+            position: Vec::new(),
+            velocity: Vec::new(),
+            effort: self.rust_loop.external_torque_estimate().to_vec(),
+        }
+    }
+
+    /// The compliant reference of the last step (`q_r` as position, `q_r'` as velocity).
+    pub fn reference_message(&self, header: &Header) -> JointState {
+        let [q_r, qdot_r, _] = self.rust_loop.reference();
+        JointState {
+            header: header.clone(),
+            name: self.names.clone(),
+            position: q_r.to_vec(),
+            velocity: qdot_r.to_vec(),
+            effort: Vec::new(),
+        }
+    }
+
+    /// The hand wrench of the last step, in the configured axes, `frame_id` their link.
+    pub fn wrench_message(&self, header: &Header) -> WrenchStamped {
+        let w = self
+            .rust_loop
+            .wrench()
+            .map(|(base, tip)| match self.wrench_frame {
+                WrenchFrame::Base => base,
+                WrenchFrame::Tip => tip,
+            })
+            .unwrap_or(&[0.0; 6]);
+        WrenchStamped {
+            header: Header {
+                stamp: header.stamp,
+                frame_id: self.wrench_frame_id().to_string(),
+            },
+            wrench: Wrench {
+                force: Vector3 {
+                    x: w[0],
+                    y: w[1],
+                    z: w[2],
+                },
+                torque: Vector3 {
+                    x: w[3],
+                    y: w[4],
+                    z: w[5],
+                },
+            },
+        }
+    }
+}
+
+/// The message types the bridge publishes (for the node and the docs).
+pub const OUTPUT_TYPES: [&str; 2] = [JOINT_STATE, WRENCH_STAMPED];
+
+/// The same bridge run offline over `messages` in order: per message, the estimate (or
+/// why it was skipped).
+pub fn offline<'a>(
+    config: &BridgeConfig,
+    messages: impl IntoIterator<Item = &'a JointState>,
+) -> Result<Vec<Result<(Stepped, Vec<f64>), InputError>>, String> {
+    let mut bridge = Bridge::new(config)?;
+    Ok(messages
+        .into_iter()
+        .map(|m| {
+            bridge
+                .process(m)
+                .map(|s| (s, bridge.rust_loop.external_torque_estimate().to_vec()))
+        })
+        .collect())
+}
