@@ -23,7 +23,7 @@ ADMITTANCE_DATA is unset (as the tests on published recordings are).
 Usage: python3 scripts/doc_commands.py [--bin target/release/admittance] [--only TEXT]
        [--keep DIR] [--list]
 Exit 0 when every block that ran passed; 1 otherwise, each failure named by file:line with
-the tail of its stderr. Needs Python 3.11 (tomllib).
+the tail of its stderr. Python 3.11 (tomllib), or 3.10 with pip.
 """
 
 from __future__ import annotations
@@ -42,8 +42,11 @@ from pathlib import Path
 
 try:
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    sys.exit("doc_commands.py needs Python 3.11 or later (tomllib)")
+except ModuleNotFoundError:  # Python 3.10: the same parser, as pip vendors it
+    try:
+        from pip._vendor import tomli as tomllib
+    except ImportError:
+        sys.exit("doc_commands.py needs Python 3.11 (tomllib), or pip in this interpreter")
 
 ROOT = Path(__file__).resolve().parent.parent
 SHELL_LANGS = {"sh", "bash", "shell", "console"}
@@ -205,6 +208,10 @@ def make_scratch(dest: Path) -> None:
         out = dest / name
         out.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(src, out, follow_symlinks=False)
+    # cargo in the copy builds into the checkout's target/ (what CI's cargo test built: the
+    # copy's files keep their times, so cargo finds them fresh) instead of building it all again
+    if (ROOT / "target").is_dir() and not (dest / "target").exists():
+        (dest / "target").symlink_to(ROOT / "target")
 
 
 def make_shims(shim_dir: Path, binary: Path, python: str) -> None:

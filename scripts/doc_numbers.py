@@ -14,7 +14,7 @@ command first (`--fresh` remakes them all). `--ci` restricts to the runs marked 
 `python3 scripts/doc_numbers.py --check --fresh`. Commands run in the checkout with
 `admittance` = --bin (default target/release/admittance) and `python` = this interpreter.
 Exit 1 when a number is off by more than its tolerance, a line or context is not found, or
-a run fails. Needs Python 3.11 (tomllib).
+a run fails. Python 3.11 (tomllib), or 3.10 with pip.
 """
 
 from __future__ import annotations
@@ -32,8 +32,11 @@ from pathlib import Path
 
 try:
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    sys.exit("doc_numbers.py needs Python 3.11 or later (tomllib)")
+except ModuleNotFoundError:  # Python 3.10: the same parser, as pip vendors it
+    try:
+        from pip._vendor import tomli as tomllib
+    except ImportError:
+        sys.exit("doc_numbers.py needs Python 3.11 (tomllib), or pip in this interpreter")
 
 ROOT = Path(__file__).resolve().parent.parent
 NUMBER = r"[-+]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?(?:[eE][-+]?\d+)?"
@@ -82,7 +85,8 @@ class Summary:
 def evaluate(expr: str, summary: Summary) -> float:
     names = {"v": summary.v, "top": summary.top, "max": max, "min": min, "abs": abs,
              "sum": sum, "len": len, "math": math}
-    value = eval(expr, {"__builtins__": {}}, names)  # expressions of this repository's manifest
+    names["__builtins__"] = {}
+    value = eval(expr, names)  # expressions of this repository's manifest only
     return float(value)
 
 
