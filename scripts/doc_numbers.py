@@ -185,13 +185,18 @@ def main() -> int:
     problems = []
     for t, table in enumerate(manifest.get("table", []), 1):
         # shorthand: every row (a variant) times every column (a cell) is one number; "{variant}"
-        # in a column's value is the row's variant; a row's `skip_cells` have no number ("-")
+        # in a column's value is the row's variant; a row's `skip_cells` have no number ("-");
+        # a row's `format` / `tol` tables, keyed "cell.nth", override a column's
         common = {k: table[k] for k in ("file", "section", "run") if k in table}
         for row in table.get("rows", []):
             for col in table.get("columns", []):
                 if col.get("cell") in row.get("skip_cells", []):
                     continue
                 e = dict(common, **col, line=row["line"])
+                key = f"{col.get('cell')}.{col.get('nth', 1)}"  # a row's own format/tol of a cell
+                for k in ("format", "tol"):
+                    if key in row.get(k, {}):
+                        e[k] = row[k][key]
                 e["value"] = col["value"].replace("{variant}", row["variant"])
                 e["tolerance"] = col.get("tolerance", table.get("tolerance", ""))
                 numbers.append(e)
@@ -255,7 +260,8 @@ def main() -> int:
                 continue
             checked += 1
             diff = abs(shown - value)
-            allowed = float(e["tol"]) + float(e.get("rtol", 0.0)) * abs(value)
+            # rtol is relative to the smaller magnitude: rtol 1.0 is "within a factor of two" both ways
+            allowed = float(e["tol"]) + float(e.get("rtol", 0.0)) * min(abs(value), abs(shown))
             ok = math.isfinite(value) and diff <= allowed + 1e-12 * abs(value)
             status = "ok  " if ok else "OFF "
             desc = e.get("text") or f"cell {e['cell']}#{e.get('nth', 1)} of {e['line'].strip()!r}"
