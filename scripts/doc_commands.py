@@ -266,6 +266,7 @@ def main() -> int:
     env.pop("PYTHONPATH", None)
 
     ran = passed = 0
+    ran_blocks: list[Block] = []
     skipped: list[tuple[Block, str]] = []
     failed: list[tuple[Block, str]] = []
     t_all = time.monotonic()
@@ -290,6 +291,7 @@ def main() -> int:
             print(f"{b.where:28} {mode:8} cwd={'repo' if cwd == ROOT else 'scratch'} {'; '.join(b.notes)}")
             continue
         ran += 1
+        ran_blocks.append(b)
         t0 = time.monotonic()
         timeout = float(e.get("timeout", 1800))
         print(f"-- {b.where} ({b.lang}{', synopsis' if e.get('synopsis') else ''}"
@@ -324,6 +326,9 @@ def main() -> int:
     print(f"\ndocumented blocks: {ran} run ({passed} passed, {len(failed)} failed), {len(skipped)} skipped, {total:.0f} s")
     for b, why in skipped:
         print(f"  skipped {b.where}: {why}")
+    for b in ran_blocks:
+        for d in (b.entry or {}).get("drop", []):
+            print(f"  line left out of {b.where}: {d['match']!r}: {d['reason']}")
     for b, err in failed:
         print(f"\nFAILED {b.where} ({b.lang} block):\n{tail(err)}")
     if cleanup and not failed:
