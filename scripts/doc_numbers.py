@@ -140,10 +140,33 @@ def format_value(value: float, fmt: str) -> str:
     return format(value, fmt)
 
 
+def overrides_of(folder: Path) -> list[str]:
+    """The --set overrides a run folder's scenario.toml lists in its opening comment."""
+    path = folder / "scenario.toml"
+    if not path.is_file():
+        return []
+    lines = path.read_text(encoding="utf-8").splitlines()
+    if not lines or not lines[0].startswith("# The scenario as run, with these command-line overrides"):
+        return []
+    out = []
+    for line in lines[1:]:
+        m = re.match(r"#\s+--set\s+(.*)$", line)
+        if not m:
+            break
+        out.append(m.group(1).strip())
+    return out
+
+
 def run_folder(name: str, spec: dict, runs: Path, fresh: bool, binary: Path) -> Path:
     out = runs / name
     if (out / "summary.json").is_file() and not fresh:
-        return out
+        # an existing folder counts only if it was run with the command's own overrides
+        wanted = sorted(a.strip("'\"") for a in re.findall(r"--set\s+('[^']*'|\"[^\"]*\"|\S+)", spec["command"]))
+        found = sorted(overrides_of(out))
+        if wanted == found:
+            return out
+        raise RuntimeError(f"{out} was run with --set {found}, the command has {wanted}: "
+                           "remove it, use --fresh or another --runs")
     shims = runs / ".doc-shims"
     shims.mkdir(parents=True, exist_ok=True)
     for cmd, target in (("admittance", str(binary)), ("python", sys.executable)):
