@@ -21,7 +21,10 @@ fn admittance(args: &[&str]) -> (i32, String, String) {
 fn ros2_bridge_arguments_and_refusals() {
     let (code, out, _) = admittance(&["ros2", "bridge", "--help"]);
     assert_eq!(code, 0);
-    assert!(out.contains("--profile") && out.contains("--distro"), "{out}");
+    assert!(
+        out.contains("--profile") && out.contains("--distro"),
+        "{out}"
+    );
     // KUKA's LBRState topic cannot be subscribed to: a bad input, named.
     let (code, _, err) = admittance(&[
         "ros2",
@@ -33,7 +36,10 @@ fn ros2_bridge_arguments_and_refusals() {
         "lbr",
     ]);
     assert_eq!(code, 3, "{err}");
-    assert!(err.contains("/lbr/state") && err.contains("/lbr/joint_states"), "{err}");
+    assert!(
+        err.contains("/lbr/state") && err.contains("/lbr/joint_states"),
+        "{err}"
+    );
     let (code, _, err) = admittance(&["ros2", "bridge", "no/such.toml", "--distro", "foxy"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--distro `foxy`"), "{err}");
@@ -47,5 +53,8 @@ fn ros2_bridge_arguments_and_refusals() {
 fn ros2_without_the_feature_says_how_to_build_it() {
     let (code, _, err) = admittance(&["ros2", "bridge", "scenarios/panda_admittance.toml"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("--features ros2") && err.contains("docs/ros2.md"), "{err}");
+    assert!(
+        err.contains("--features ros2") && err.contains("docs/ros2.md"),
+        "{err}"
+    );
 }

@@ -86,17 +86,15 @@ mod kernels;
 mod limits;
 mod model;
 mod provenance;
-mod stamp;
 mod solve;
+mod stamp;
 
 pub use budget::{check_budget, Estimate, FitSize};
 pub use config::{
-    BroadConfig, FrictionFeatures, GramStrategy, WidthRule, DEFAULT_FRICTION_SCALES,
-    DEFAULT_NODES,
+    BroadConfig, FrictionFeatures, GramStrategy, WidthRule, DEFAULT_FRICTION_SCALES, DEFAULT_NODES,
 };
 pub use coverage::COVERAGE_QUANTILE;
 pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
-pub use limits::{format_bytes, Budget, DEFAULT_MAX_FLOP, DEFAULT_MAX_MEMORY_BYTES};
 pub use destination::check_model_destination;
 pub use error::BroadError;
 pub use features::NodeSet;
@@ -105,6 +103,7 @@ pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
 pub use growth::{GrowthReport, GrowthSpec};
 pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
 pub use kernels::exp_nonpositive_slice;
+pub use limits::{format_bytes, Budget, DEFAULT_MAX_FLOP, DEFAULT_MAX_MEMORY_BYTES};
 pub use model::{BroadModel, Workspace};
 pub use provenance::{
     ArmCheck, ArmIdentity, CentreSettings, DataSettings, FitSettings, GrowthRecord, Provenance,

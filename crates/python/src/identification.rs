@@ -15,8 +15,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{rows, value_error, vector_out};
+use crate::free_motion::{data_arg, training_arrays};
 use crate::model::PyModel;
-use crate::network::{data_arg, training_arrays};
 
 /// An identified arm (`identify`, `load_identification`): the rigid-body `model` with its
 /// identified inertias, and per-joint rotor inertia, friction, offset and springs.

@@ -20,6 +20,7 @@ mod closed_loop;
 mod config;
 mod control;
 mod convert;
+mod free_motion;
 mod identification;
 mod model;
 mod network;

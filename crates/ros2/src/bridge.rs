@@ -322,11 +322,25 @@ impl Bridge {
         }
         self.map_names(msg)?;
         let topic = self.map.topic.as_str();
-        Self::gather(topic, msg, &self.map.q_field, &self.index, &self.names, &mut self.q)?;
+        Self::gather(
+            topic,
+            msg,
+            &self.map.q_field,
+            &self.index,
+            &self.names,
+            &mut self.q,
+        )?;
         if let Some(f) = &self.map.qdot_field {
             Self::gather(topic, msg, f, &self.index, &self.names, &mut self.qdot)?;
         }
-        Self::gather(topic, msg, &self.map.tau_field, &self.index, &self.names, &mut self.tau)?;
+        Self::gather(
+            topic,
+            msg,
+            &self.map.tau_field,
+            &self.index,
+            &self.names,
+            &mut self.tau,
+        )?;
         if let Some(k) = &self.map.tau_scale {
             for (t, k) in self.tau.iter_mut().zip(k) {
                 *t *= k;

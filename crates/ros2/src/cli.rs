@@ -209,7 +209,9 @@ fn duration(flag: &str, s: f64) -> Result<Duration, Failure> {
     if s.is_finite() && s > 0.0 && s < 1e7 {
         Ok(Duration::from_secs_f64(s))
     } else {
-        Err(usage(format!("{flag} {s}: give a positive number of seconds")))
+        Err(usage(format!(
+            "{flag} {s}: give a positive number of seconds"
+        )))
     }
 }
 
@@ -278,7 +280,9 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
     })
     .map_err(failed)?;
     eprint!("{}", stats.summary());
-    if stats.stepped > 10 && (stats.stamp_rate_hz - stats.loop_rate_hz).abs() > 0.05 * stats.loop_rate_hz {
+    if stats.stepped > 10
+        && (stats.stamp_rate_hz - stats.loop_rate_hz).abs() > 0.05 * stats.loop_rate_hz
+    {
         eprintln!(
             "admittance ros2 bridge: warning: the messages came at {:.1} Hz but the loop runs at {:.1} Hz: set the scenario's rate with --set plant.control_rate_hz={:.0}",
             stats.stamp_rate_hz, stats.loop_rate_hz, stats.stamp_rate_hz

@@ -40,9 +40,12 @@ impl DdsOptions {
         let domain_id = match domain_id {
             Some(d) => d,
             None => match std::env::var("ROS_DOMAIN_ID") {
-                Ok(v) if !v.trim().is_empty() => v.trim().parse::<u16>().ok().filter(|d| *d <= 232).ok_or_else(|| {
-                    format!("ROS_DOMAIN_ID `{v}` is not a domain id (0 to 232)")
-                })?,
+                Ok(v) if !v.trim().is_empty() => v
+                    .trim()
+                    .parse::<u16>()
+                    .ok()
+                    .filter(|d| *d <= 232)
+                    .ok_or_else(|| format!("ROS_DOMAIN_ID `{v}` is not a domain id (0 to 232)"))?,
                 _ => 0,
             },
         };
@@ -79,8 +82,7 @@ fn node(context: &Context, name: &str) -> Result<Node, String> {
         Some((ns, base)) => (if ns.is_empty() { "/" } else { ns }, base),
         None => ("/", name),
     };
-    let node_name =
-        NodeName::new(ns, base).map_err(|e| format!("node name `{name}`: {e:?}"))?;
+    let node_name = NodeName::new(ns, base).map_err(|e| format!("node name `{name}`: {e:?}"))?;
     context
         .new_node(node_name, NodeOptions::new().enable_rosout(false))
         .map_err(|e| format!("node `{name}`: {e:?}"))
@@ -173,8 +175,12 @@ pub fn run_bridge(
     let input = bridge.input_map().topic.clone();
     let mut subscription =
         subscribe::<JointState>(&mut node, &input, JOINT_STATE_TYPE, input_qos())?;
-    let torque_pub =
-        publisher::<JointState>(&mut node, &topics.torque_topic, JOINT_STATE_TYPE, output_qos(100))?;
+    let torque_pub = publisher::<JointState>(
+        &mut node,
+        &topics.torque_topic,
+        JOINT_STATE_TYPE,
+        output_qos(100),
+    )?;
     let wrench_pub = publisher::<WrenchStamped>(
         &mut node,
         &topics.wrench_topic,
@@ -182,7 +188,12 @@ pub fn run_bridge(
         output_qos(100),
     )?;
     let reference_pub = match &topics.reference_topic {
-        Some(t) => Some(publisher::<JointState>(&mut node, t, JOINT_STATE_TYPE, output_qos(100))?),
+        Some(t) => Some(publisher::<JointState>(
+            &mut node,
+            t,
+            JOINT_STATE_TYPE,
+            output_qos(100),
+        )?),
         None => None,
     };
     let mut poll = Poll::new().map_err(|e| format!("poll: {e}"))?;
@@ -343,14 +354,19 @@ pub fn fake_sample(k: u64, joints: &[String], t0_ns: i64, period_ns: i64) -> Joi
         let w = std::f64::consts::TAU / (3.0 + f);
         m.position.push(0.2 * f - 0.4 + 0.3 * (w * t).sin());
         m.velocity.push(0.3 * w * (w * t).cos());
-        m.effort.push(1.5 * (1.0 + f) * (0.7 * t + f).sin() + 0.2 * f);
+        m.effort
+            .push(1.5 * (1.0 + f) * (0.7 * t + f).sin() + 0.2 * f);
     }
     m
 }
 
 /// Publishes [`fake_sample`]s at `rate_hz` (best-effort) until the bridge's first answer
 /// arrives on the torque topic, then for `duration` more, and collects the answers.
-pub fn run_fake_arm(dds: &DdsOptions, opts: &FakeArmOptions, stop: &AtomicBool) -> Result<FakeArmReport, String> {
+pub fn run_fake_arm(
+    dds: &DdsOptions,
+    opts: &FakeArmOptions,
+    stop: &AtomicBool,
+) -> Result<FakeArmReport, String> {
     if !(opts.rate_hz.is_finite() && opts.rate_hz > 0.0 && opts.rate_hz <= 100_000.0) {
         return Err(format!("--rate-hz {} is not in (0, 100000]", opts.rate_hz));
     }

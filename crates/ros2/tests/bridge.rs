@@ -62,7 +62,11 @@ fn estimate_equals_the_loop_stepped_directly_and_names_map_in_any_order() {
             desired: None,
         });
         let (_, est) = r.as_ref().unwrap();
-        assert_eq!(est.as_slice(), direct.external_torque_estimate(), "step {k}");
+        assert_eq!(
+            est.as_slice(),
+            direct.external_torque_estimate(),
+            "step {k}"
+        );
         nonzero += est.iter().any(|x| x.abs() > 1e-3) as usize;
     }
     assert!(nonzero > 900, "{nonzero}");
@@ -90,7 +94,10 @@ fn published_messages_carry_the_stamp_names_and_frame() {
     assert!(base.iter().any(|x| x.abs() > 1e-6));
     let mut tip = config("franka");
     tip.wrench_frame = WrenchFrame::Tip;
-    assert_eq!(Bridge::new(&tip).unwrap().wrench_frame_id(), "panda_hand_tcp");
+    assert_eq!(
+        Bridge::new(&tip).unwrap().wrench_frame_id(),
+        "panda_hand_tcp"
+    );
     let reference = bridge.reference_message(&last.header);
     assert_eq!(reference.position, bridge.rust_loop().reference()[0]);
 }
@@ -114,10 +121,18 @@ fn bad_messages_are_skipped_named_and_change_nothing() {
     bad.push((m, "wrong length", "field `velocity` has 0 values"));
     let mut m = base.clone();
     m.position[2] = f64::NAN;
-    bad.push((m, "non-finite value", "field `position` of joint `panda_joint3` is NaN"));
+    bad.push((
+        m,
+        "non-finite value",
+        "field `position` of joint `panda_joint3` is NaN",
+    ));
     let mut m = base.clone();
     m.header.stamp = good[100].header.stamp;
-    bad.push((m, "stamp not increasing", "is not after the previous message's"));
+    bad.push((
+        m,
+        "stamp not increasing",
+        "is not after the previous message's",
+    ));
     let mut m = base.clone();
     m.header.stamp.sec = 0;
     m.header.stamp.nanosec = 0;
@@ -151,10 +166,17 @@ fn bad_messages_are_skipped_named_and_change_nothing() {
 fn profiles_and_joint_lists_it_cannot_use_are_named() {
     // KUKA's LBRState is not a JointState.
     let e = Bridge::new(&config("lbr")).err().unwrap();
-    assert!(e.contains("/lbr/state") && e.contains("/lbr/joint_states"), "{e}");
+    assert!(
+        e.contains("/lbr/state") && e.contains("/lbr/joint_states"),
+        "{e}"
+    );
     // UR: current needs torque constants; with them the effort is scaled.
     // (A copy for a 7-joint arm: the Panda's names, a torque constant of 2 N m/A.)
-    let names = chain().iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ");
+    let names = chain()
+        .iter()
+        .map(|n| format!("\"{n}\""))
+        .collect::<Vec<_>>()
+        .join(", ");
     let ur = include_str!("../../bag/profiles/ur.toml")
         .replace(
             "unit = \"A\"",
@@ -191,7 +213,10 @@ fn profiles_and_joint_lists_it_cannot_use_are_named() {
     let mut c = config("franka");
     c.joints = Some(vec!["a".into(), "b".into()]);
     let e = Bridge::new(&c).err().unwrap();
-    assert!(e.contains("2 joint names given") && e.contains("panda_joint1"), "{e}");
+    assert!(
+        e.contains("2 joint names given") && e.contains("panda_joint1"),
+        "{e}"
+    );
     let mut c = config("franka");
     c.overrides = vec!["observer.cutoff_hz=oops".into()];
     let e = Bridge::new(&c).err().unwrap();

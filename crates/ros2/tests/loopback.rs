@@ -71,7 +71,15 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
     // them by name.
     let joints: Vec<String> = (1..=7).rev().map(|i| format!("panda_joint{i}")).collect();
     let mut arm = Command::new(exe)
-        .args(["fake-arm", "--profile", "franka", "--rate-hz", "1000", "--duration", "10"])
+        .args([
+            "fake-arm",
+            "--profile",
+            "franka",
+            "--rate-hz",
+            "1000",
+            "--duration",
+            "10",
+        ])
         .args(["--joints", &joints.join(",")])
         .arg("--out")
         .arg(&report_path)
@@ -90,7 +98,12 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
     let status = wait(&mut bridge, Duration::from_secs(30), "the bridge");
     let mut stderr = String::new();
     use std::io::Read;
-    bridge.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+    bridge
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
     assert!(status.success(), "bridge: {status}\n{stderr}");
     eprint!("{stderr}");
 
@@ -121,7 +134,10 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
 
     // The offline run over the messages the bridge stepped, in the same order.
     let stamps: Vec<i64> = report.answers.iter().map(|a| a.stamp_ns).collect();
-    assert!(stamps.windows(2).all(|w| w[0] < w[1]), "answers out of order");
+    assert!(
+        stamps.windows(2).all(|w| w[0] < w[1]),
+        "answers out of order"
+    );
     let messages: Vec<_> = stamps
         .iter()
         .map(|s| {
@@ -150,11 +166,18 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
             .iter()
             .zip(estimate)
             .all(|(x, y)| x.to_bits() == y.to_bits());
-        assert!(same, "stamp {}: published {:?}, offline {:?}", a.stamp_ns, a.effort, estimate);
+        assert!(
+            same,
+            "stamp {}: published {:?}, offline {:?}",
+            a.stamp_ns, a.effort, estimate
+        );
         nonzero += estimate.iter().any(|x| x.abs() > 1e-3) as usize;
     }
     // The comparison is not of zeros (the estimate is held at zero for the 0.5 s warm-up).
-    assert!(nonzero > report.answers.len() / 2, "{nonzero} non-zero estimates");
+    assert!(
+        nonzero > report.answers.len() / 2,
+        "{nonzero} non-zero estimates"
+    );
 
     println!(
         "loopback: {} messages in the window at {:.1} Hz, {:.2} % answered; receipt -> publish median {:.0} us, p99 {:.0} us; take -> publish median {:.0} us, p99 {:.0} us; round trip median {:.0} us, p99 {:.0} us; discovery {:.2} s; {} answers equal to the offline run",

@@ -167,8 +167,8 @@ fn identified_nominal_of(
         return Ok(None);
     };
     let key_err = |m: String| ctx.err("observer.identification", m, None);
-    let bytes = std::fs::read(file)
-        .map_err(|e| key_err(format!("cannot read {}: {e}", file.display())))?;
+    let bytes =
+        std::fs::read(file).map_err(|e| key_err(format!("cannot read {}: {e}", file.display())))?;
     let identification = admittance_dynamics::Identification::load(file, model)
         .map_err(|e| key_err(e.to_string()))?;
     Ok(Some(IdentifiedNominal {

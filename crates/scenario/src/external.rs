@@ -13,10 +13,10 @@ use admittance_sim::StepRecord;
 use crate::error::ScenarioError;
 use crate::gather::{Gather, WindowSample};
 use crate::hand::HandKinematics;
-use admittance_loop::Divergence;
 use crate::metrics::ObserverTrainingMetrics;
 use crate::recorder::{Recorder, Row};
 use crate::runner::{finish, VariantRun};
+use admittance_loop::Divergence;
 
 /// The desired trajectory of one control step (what the loop was given).
 #[derive(Clone, Copy, Debug)]

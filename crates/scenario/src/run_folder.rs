@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
+use admittance_runfolder::health::{self, Severity, VariantHealth};
 use admittance_runfolder::settings::RunSettings;
 use admittance_runfolder::summary::{self, OutTarget};
-use admittance_runfolder::health::{self, Severity, VariantHealth};
 use admittance_runfolder::{files, writer};
 use serde_json::{json, Value};
 

@@ -30,10 +30,17 @@ fn the_excitation_scenario_moves_every_joint_inside_its_limits_from_rest() {
     // Every joint moves: the desired angle spans a good part of each joint's range.
     let columns = &run.series.columns;
     for j in &run.joints {
-        let i = columns.iter().position(|c| c == &format!("q_d.{j}")).unwrap();
-        let (lo, hi) = run.series.rows.iter().fold((f64::MAX, f64::MIN), |(lo, hi), r| {
-            (lo.min(r[i]), hi.max(r[i]))
-        });
+        let i = columns
+            .iter()
+            .position(|c| c == &format!("q_d.{j}"))
+            .unwrap();
+        let (lo, hi) = run
+            .series
+            .rows
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), r| {
+                (lo.min(r[i]), hi.max(r[i]))
+            });
         assert!(hi - lo > 0.3, "{j}: q_d spans only {:.3} rad", hi - lo);
     }
     // From rest: the first row's desired angle is the plant's start, tracked closely.

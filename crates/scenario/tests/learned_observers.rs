@@ -128,7 +128,10 @@ fn learned_variants_train_validate_cache_and_estimate() {
         );
         let expected = per_joint(r, "identification_expected_false_torque_rms");
         assert_eq!(expected.len(), 7, "{}", r.name);
-        assert!(expected.iter().all(|x| x.is_finite() && *x >= 0.0), "{expected:?}");
+        assert!(
+            expected.iter().all(|x| x.is_finite() && *x >= 0.0),
+            "{expected:?}"
+        );
     }
     // The second use of the same data and settings reads the identification back.
     assert_eq!(
@@ -185,7 +188,12 @@ fn learned_variants_train_validate_cache_and_estimate() {
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .filter(|p| !p.file_name().unwrap().to_string_lossy().starts_with("identification-"))
+        .filter(|p| {
+            !p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("identification-")
+        })
         .collect();
     for p in &metas {
         let mut meta: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();

@@ -4,7 +4,6 @@
 use admittance_learning::rbf::GrowthParams;
 use serde::{Deserialize, Serialize};
 
-
 /// The networks of a neural controller.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

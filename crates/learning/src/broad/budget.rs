@@ -21,8 +21,8 @@
 use super::config::BroadConfig;
 use super::error::BroadError;
 use super::limits::{format_bytes, Budget};
-use serde::{Deserialize, Serialize};
 use super::model::BroadModel;
+use serde::{Deserialize, Serialize};
 
 /// The size of a fit or a growth, the input of [`check_budget`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Configuration of the broad network fit (docs/method.md sections 5 and 7).
 
-use super::limits::Budget;
 use super::error::BroadError;
+use super::limits::Budget;
 use serde::{Deserialize, Serialize};
 
 /// Friction-shaped extra inputs, appended to the linear part of the pattern row

@@ -122,8 +122,11 @@ pub(crate) fn identified_nominal(
     let validation = load_data(ctx, &val_src, &arm_joints, options, simulate)?;
     let train = Conditioned::new(&train, filter)
         .map_err(|e| key_err(format!("with the data of observer.training.data: {e}")))?;
-    let validation = Conditioned::new(&validation, filter)
-        .map_err(|e| key_err(format!("with the data of observer.training.validation: {e}")))?;
+    let validation = Conditioned::new(&validation, filter).map_err(|e| {
+        key_err(format!(
+            "with the data of observer.training.validation: {e}"
+        ))
+    })?;
     let label = ctx.variant.unwrap_or("base");
     options.report(label, Stage::Train, 0, 1);
     let identification = identify(

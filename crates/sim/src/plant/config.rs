@@ -44,9 +44,9 @@ use std::collections::BTreeMap;
 use admittance_dynamics::Model;
 use serde::{Deserialize, Serialize};
 
+use crate::checks::{finite, joint_index, joint_selection, non_negative, positive};
 use crate::environment::EnvironmentConfig;
 use crate::integrator::Integrator;
-use crate::checks::{finite, joint_index, joint_selection, non_negative, positive};
 use crate::plant::error::SimError;
 use crate::sensors::SensorConfig;
 

@@ -25,8 +25,8 @@ pub mod actuator;
 pub mod config;
 pub mod error;
 pub mod friction;
-mod integrate;
 pub(crate) mod implicit;
+mod integrate;
 pub(crate) mod linalg;
 pub(crate) mod spring;
 
@@ -36,10 +36,10 @@ use admittance_dynamics::{
 };
 use nalgebra::{Matrix3, Vector3};
 
+use crate::checks::joint_selection;
 use crate::environment::Environment;
 use crate::integrator::Integrator;
 use actuator::{clamp_effort, Deadzone};
-use crate::checks::joint_selection;
 use config::{PlantConfig, Solver};
 use error::{check_len, SimError};
 use friction::Friction;
