@@ -121,7 +121,7 @@ pub fn deadzone_groups(folder: &RunFolder) -> Vec<DeadzoneGroup> {
         let rmse = |variant: &Option<String>, joint: &str| {
             let k = folder.joints.iter().position(|j| j == joint)?;
             let v = folder.variant(variant.as_deref()?)?;
-            crate::document::joint_metric(v, m::TRACKING_RMSE, k)
+            crate::values::joint_metric(v, m::TRACKING_RMSE, k)
         };
         let joint = v
             .deadzones
@@ -196,7 +196,7 @@ pub fn worst_joint(folder: &RunFolder) -> Option<&str> {
     let mut best: Option<(usize, f64)> = None;
     for v in &folder.variants {
         for k in 0..folder.joints.len() {
-            if let Some(x) = crate::document::joint_metric(v, m::TRACKING_RMSE, k) {
+            if let Some(x) = crate::values::joint_metric(v, m::TRACKING_RMSE, k) {
                 if x.is_finite() && best.is_none_or(|(_, b)| x > b) {
                     best = Some((k, x));
                 }

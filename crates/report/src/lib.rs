@@ -31,6 +31,7 @@ mod plot;
 mod recording;
 mod scenario_file;
 mod table;
+mod values;
 
 pub use arm::load_arm;
 pub use experiment::Experiment;

@@ -7,9 +7,9 @@ use admittance_runfolder::metrics::{self as m, Metric, Window};
 use serde_json::Value;
 
 use super::blocks::Block;
-use super::values::{fmt_value, is_zero};
 use crate::figures::short_name;
 use crate::folder::RunFolder;
+use crate::values::{fmt_value, is_zero};
 
 /// Metrics that must be zero (or false): said in one line when they are everywhere.
 const CHECKS: [&str; 11] = [

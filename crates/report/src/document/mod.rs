@@ -7,19 +7,13 @@
 mod blocks;
 mod metrics;
 mod opening;
-mod values;
 mod warnings;
 
 use admittance_runfolder::files;
 use blocks::Block;
 
-use crate::folder::{RunFolder, Variant};
+use crate::folder::RunFolder;
 use crate::plot::Note;
-
-/// The value of a per-joint metric of `v` at joint `index`.
-pub(crate) fn joint_metric(v: &Variant, name: &str, index: usize) -> Option<f64> {
-    values::per_joint(v, name)?.get(index).copied().flatten()
-}
 
 /// The line said when the folder has no `settings.json`.
 fn settings_note(folder: &RunFolder) -> Option<String> {

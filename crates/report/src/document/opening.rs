@@ -5,11 +5,11 @@
 use admittance_runfolder::{columns, metrics as m, settings as rs};
 
 use super::blocks::Block;
-use super::values::{fmt_num, num};
 use crate::experiment::{deadzone_groups, DeadzoneGroup, Experiment};
 use crate::figures::short_name;
 use crate::folder::{RunFolder, Variant};
 use crate::number::setting;
+use crate::values::{fmt_num, num};
 
 /// The metrics the warnings read; a summary without them could not be checked.
 const CHECKED: [&str; 4] = [
@@ -36,7 +36,7 @@ fn yes_no(ok: bool) -> &'static str {
 
 /// The value of a per-joint metric at joint `index`.
 fn joint_value(v: &Variant, name: &str, index: usize) -> Option<f64> {
-    super::joint_metric(v, name, index)
+    crate::values::joint_metric(v, name, index)
 }
 
 /// `a / b = ×r` of the tracking RMSE of `joint` for two variants, and whether `a` is the
@@ -508,7 +508,7 @@ fn other(folder: &RunFolder) -> (String, Vec<Row>) {
         .variants
         .iter()
         .filter_map(|v| {
-            let list = super::values::per_joint(v, m::TRACKING_RMSE)?;
+            let list = crate::values::per_joint(v, m::TRACKING_RMSE)?;
             let (k, x) = list
                 .iter()
                 .enumerate()

@@ -90,3 +90,8 @@ mod tests {
         assert!(is_zero(&json!([0, 0.0, null])) && !is_zero(&json!([0, 1e-9])));
     }
 }
+
+/// The value of a per-joint metric of `v` at joint `index`.
+pub(crate) fn joint_metric(v: &Variant, name: &str, index: usize) -> Option<f64> {
+    per_joint(v, name)?.get(index).copied().flatten()
+}
