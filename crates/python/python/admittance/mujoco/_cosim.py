@@ -54,7 +54,7 @@ class CosimConfig:
     sensor_cutoff_hz: float = 40.0
     input_filter_hz: float = 10.0
     estimate_cutoff_hz: float = 5.0
-    warmup: float = 0.5
+    warmup: float | None = None  # s; None: the loop's own default (observer.warmup)
     nominal_inertia_scale: float = 0.8
     momentum_gain: float = 50.0
     admittance_damping: float = 10.0
@@ -288,7 +288,7 @@ def loop_config(variant, cfg, m, q0, pd, identification_file=None):
             **({"identification": str(identification_file)} if identified else {}),
             "cutoff_hz": cfg.estimate_cutoff_hz,
             "input_filter_hz": cfg.input_filter_hz,
-            "warmup": cfg.warmup,
+            **({"warmup": cfg.warmup} if cfg.warmup is not None else {}),
             "momentum": {"gain": cfg.momentum_gain},
         },
     }
