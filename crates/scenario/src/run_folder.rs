@@ -276,6 +276,7 @@ pub fn write_external_run_folder(
     check_out_dir(out_dir, protect, force)?;
     let source = ScenarioSource::parse(scenario_text, files::SCENARIO)?;
     let mut scenario_name = String::new();
+    let mut thresholds = Vec::with_capacity(runs.len());
     let names = source.variant_names();
     for run in runs {
         if !names.contains(&run.name) {
@@ -286,10 +287,14 @@ pub fn write_external_run_folder(
             )));
         }
         let s: Scenario = source.resolve(Some(&run.name))?;
+        thresholds.push(s.health);
         scenario_name = s.name;
     }
-    let judged: Vec<(String, VariantHealth)> =
-        runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
+    let judged: Vec<(String, VariantHealth)> = runs
+        .iter()
+        .zip(&thresholds)
+        .map(|(r, h)| (r.name.clone(), judge_with(r, h)))
+        .collect();
     let mut summary = summary_json(&scenario_name, runs, &judged);
     if let Value::Object(map) = &mut summary {
         for (k, v) in extra {
@@ -325,14 +330,20 @@ pub const STOPPING_RULES: [&str; 2] = ["divergence", "nonfinite_metric"];
 /// The health of one variant: `admittance_runfolder::health::assess` on its metrics, with
 /// the divergence's reason in its message.
 fn judge(run: &VariantRun) -> VariantHealth {
+    judge_with(run, &run.health_settings)
+}
+
+/// [`judge`] with the thresholds `settings` (a variant run outside this crate: its
+/// scenario's `[health]`).
+fn judge_with(run: &VariantRun, settings: &health::HealthSettings) -> VariantHealth {
     let metrics: serde_json::Map<String, Value> = run.metrics.to_map().into_iter().collect();
-    let mut verdicts = health::assess(&metrics, &run.joints, &run.health_settings);
+    let mut verdicts = health::assess(&metrics, &run.joints, settings);
     if let Some(d) = &run.divergence {
         for v in verdicts.iter_mut().filter(|v| v.rule == "divergence") {
             v.message = format!("diverged at t = {} s: {}", d.time, d.reason);
         }
     }
-    VariantHealth::new(run.health_settings.clone(), verdicts)
+    VariantHealth::new(settings.clone(), verdicts)
 }
 
 /// `summary.json` of a run.
