@@ -6,20 +6,18 @@
 //!
 //! integrated at a plant rate finer than the control rate; the command is held over a
 //! control period (zero-order hold, [`Plant::step_control`]).
-//!
 //! * The true model is the nominal one with `inertia_scale`, `body_scales`, a `payload`
 //!   and a `gravity` override applied (the controller keeps the nominal one).
 //! * The command goes through the per-joint deadzone `D` and is then clamped to the
 //!   effort limits (times `effort_limit_scale`); a non-finite command is taken as zero
 //!   and reported ([`StepRecord::command_nonfinite`]).
-//! * Friction `F`, the environment's `M_E` and `C_E` are handled implicitly (see
-//!   [`crate::integrator`]); the rest of `tau_ext` and the spring explicitly.
+//! * Friction `F`, the environment's `M_E` and `C_E` implicitly ([`crate::integrator`]),
+//!   the rest of `tau_ext` and the spring explicitly.
 //! * After construction a step allocates nothing and never panics; if the state ever
 //!   became non-finite (it should not), the step is undone, the velocity zeroed and
 //!   [`StepRecord::diverged`] set.
 
-// Parallel per-joint arrays read clearest indexed.
-#![allow(clippy::needless_range_loop)]
+#![allow(clippy::needless_range_loop)] // parallel per-joint arrays read clearest indexed
 
 pub mod actuator;
 pub mod config;
