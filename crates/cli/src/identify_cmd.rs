@@ -148,6 +148,10 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     let data = crate::train_cmd::load_data(&args.data, Some(&joints))?;
     let rows = rows_until(&args.data, &data, args.until)?;
     let train = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
+    let repeats_every_s = match args.validation {
+        None => crate::train_cmd::warn_if_repeating(&args.data, &data, rows, args.folds),
+        Some(_) => None,
+    };
     let validation = match &args.validation {
         Some(p) => Some(Conditioned::new(
             p,
@@ -181,6 +185,9 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         json!(args.validation.as_ref().map(|p| p.display().to_string())),
     );
     provenance.insert("input_filter_hz".into(), json!(args.input_filter_hz));
+    if let Some(period) = repeats_every_s {
+        provenance.insert("data_repeats_every_s".into(), json!(period));
+    }
     ident
         .save(&args.out, &arm, provenance)
         .map_err(|e| CliError {

@@ -17,7 +17,7 @@ mod args;
 mod data;
 
 pub use args::{non_negative_hz, positive_number};
-pub use data::load as load_data;
+pub use data::{load as load_data, warn_if_repeating};
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -181,6 +181,9 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     let (data, x, y) = target_arrays(&args.data, &joints, filter, id)?;
     let n = data.dof();
     let train_rows = data::training_rows(&args.data, &data, args.validation_fraction)?;
+    if args.validation.is_none() {
+        data::warn_if_repeating(&args.data, &data, data.t.len(), args.folds);
+    }
     let separate = match &args.validation {
         Some(p) => Some((p, target_arrays(p, &joints, filter, id)?)),
         None => None,
@@ -190,6 +193,9 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         friction: FrictionFeatures::for_observer(n, args.friction_features, None),
         cv_folds: args.folds,
         budget: args.budget.budget(),
+        // A residual on an identification keeps the identification alone where it does
+        // not pay on unseen motion.
+        zero_unhelpful_outputs: ident.is_some(),
         ..BroadConfig::default()
     };
     if let Some(seed) = args.seed {
@@ -228,7 +234,7 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     .map_err(learn_error)?;
     net.save(&args.out).map_err(learn_error)?;
     crate::write_stdout(&format!(
-        "samples: {}\nvalidation: {split}{}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nexpected false torque on unseen motion (rms, N m): [{}]\ncoverage threshold: {}\nwrote {}\n",
+        "samples: {}\nvalidation: {split}{}\nvalidation samples: {}\nnodes: {}\nlambda: {:.3e} (relative {:.1e})\ntime: {:.3} s\nvalidation nrmse: [{}]\nexpected false torque on unseen motion (rms, N m): [{}]\n{}coverage threshold: {}\nwrote {}\n",
         report.samples,
         if report.cv_folds > 0 {
             " (every row scored by a fit on the other stretches)"
@@ -242,10 +248,23 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         seconds,
         fmt_list(&report.validation_nrmse),
         fmt_list(&report.validation_rmse),
+        zeroed_line(&report.zeroed_outputs, &joints),
         net.coverage_threshold().map_or("none".into(), |t| format!("{t:.4}")),
         args.out.display()
     ));
     Ok(())
+}
+
+/// The outputs a residual fit set to zero, by joint name (empty when none).
+fn zeroed_line(zeroed: &[usize], joints: &[String]) -> String {
+    if zeroed.is_empty() {
+        return String::new();
+    }
+    let names: Vec<&str> = zeroed.iter().map(|&o| joints[o].as_str()).collect();
+    format!(
+        "zeroed (the residual did not beat the identification alone on unseen motion): [{}]\n",
+        names.join(", ")
+    )
 }
 
 /// The data settings of a growth: the model file's, which explicit flags must agree with;

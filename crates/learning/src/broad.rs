@@ -86,6 +86,7 @@ mod kernels;
 mod limits;
 mod model;
 mod provenance;
+mod repeats;
 mod solve;
 mod stamp;
 
@@ -98,11 +99,12 @@ pub use data::{Dataset, Standardiser, MAX_ABS_DATA_VALUE};
 pub use destination::check_model_destination;
 pub use error::BroadError;
 pub use features::NodeSet;
-pub use fit::{fit, fit_with_nodes, FitReport, LambdaScore, PhaseTimes};
+pub use fit::{fit, fit_with_nodes, FitReport, LambdaScore, PhaseTimes, REQUIRED_GAIN};
 pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
 pub use growth::{GrowthReport, GrowthSpec};
 pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
 pub use kernels::exp_nonpositive_slice;
+pub use repeats::repeat_period;
 pub use limits::{format_bytes, Budget, DEFAULT_MAX_FLOP, DEFAULT_MAX_MEMORY_BYTES};
 pub use model::{BroadModel, Workspace};
 pub use provenance::{

@@ -183,3 +183,28 @@ pub(crate) fn training_arrays(
     }
     Ok((x, y, data.len()))
 }
+
+/// Without a separate validation recording the settings are chosen on stretches of the
+/// data itself; when its motion repeats those stretches are motion the fit has seen. The
+/// period in samples of the rows `x` (`[q, qdot, qddot]`, `n` joints), if any.
+pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option<usize> {
+    let q: Vec<f64> = x.chunks_exact(3 * n).flat_map(|r| r[..n].iter().copied()).collect();
+    let rows = q.len() / n.max(1);
+    admittance_learning::broad::repeat_period(&q, n, rows - rows / folds.max(2))
+}
+
+/// Warns (Python `UserWarning`) that `arg`'s motion repeats every `period` samples.
+pub(crate) fn warn_repeating(py: Python<'_>, arg: &str, period: usize) -> PyResult<()> {
+    let message = std::ffi::CString::new(format!(
+        "`{arg}`: the motion repeats every {period} samples, so the held-out stretches are motion \
+         the fit has seen and the expected error is optimistic; record other motion (e.g. \
+         adm.excitation(m, duration, seed=2)) and pass it as `validation=`"
+    ))
+    .unwrap_or_default();
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &message,
+        1,
+    )
+}

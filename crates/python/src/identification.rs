@@ -108,6 +108,14 @@ pub fn identify(
         springs: friction && springs,
         ..Default::default()
     };
+    if validation.is_none() {
+        let n = urdf.nq().max(1);
+        let rows = train.q.len() / n;
+        let max_lag = rows - rows / settings.folds.max(2);
+        if let Some(period) = admittance_learning::broad::repeat_period(&train.q, n, max_lag) {
+            crate::free_motion::warn_repeating(py, "data", period)?;
+        }
+    }
     let ident = py
         .detach(|| {
             rust_identify(

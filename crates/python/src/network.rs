@@ -244,6 +244,8 @@ pub fn train(
             k: width_neighbours,
             scale: width_scale,
         },
+        // A residual on a nominal model keeps the model alone where it does not pay.
+        zero_unhelpful_outputs: nominal.is_some(),
         ..defaults
     };
     let options = TrainOptions {
@@ -265,18 +267,31 @@ pub fn train(
         let val_rows = val_arg
             .map(|v| training_arrays(v, "validation", n, Some(&joints), input_filter_hz, nominal))
             .transpose()?;
+        let repeats = match (&val_rows, holdout) {
+            (None, Holdout::CrossValidation) => {
+                crate::free_motion::repeat_period_of_rows(&train_rows.0, n, folds)
+            }
+            _ => None,
+        };
         let split = Split::new(train_rows, val_rows, holdout, n)?;
         let (train_set, val_set) = split.sets(n)?;
         let (net, report) = fit(&train_set, val_set.as_ref(), &config).map_err(broad_error)?;
         require_finite_metrics(&report.validation_nrmse, "training")?;
-        Ok(PyNetwork {
+        let network = PyNetwork {
             model: net,
             validation_nrmse: Some(report.validation_nrmse),
             samples: Some(report.samples),
             validation_samples: Some(report.validation_samples),
             seconds: Some(report.times.total_s),
             options: Some(options),
-        })
+        };
+        Ok((network, repeats))
+    })
+    .and_then(|(network, repeats)| {
+        if let Some(period) = repeats {
+            crate::free_motion::warn_repeating(py, "data", period)?;
+        }
+        Ok(network)
     })
 }
 

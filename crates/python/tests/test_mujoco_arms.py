@@ -15,7 +15,9 @@ try:
 except importlib.metadata.PackageNotFoundError:
     pytest.skip("example-robot-data is not installed (pip install example-robot-data==6.0.0)", allow_module_level=True)
 
-from admittance.mujoco._arms import OBSERVERS, ArmsConfig, run_arm, table_markdown  # noqa: E402
+from admittance.mujoco._arms import (  # noqa: E402
+    ESTIMATE_CUTOFFS_HZ, ESTIMATE_NOISE_MARGIN, OBSERVERS, ArmsConfig, run_arm, table_markdown,
+)
 
 
 def test_one_arm_short(tmp_path):
@@ -37,3 +39,11 @@ def test_one_arm_short(tmp_path):
     # The pushes reach the joints: MuJoCo's J^T f is not negligible.
     assert r["pushed_torque_rms"] > 0.3
     assert "| so101 | 5 |" in table_markdown([r])
+    # The estimate's low-pass is chosen on the validation recording: the fastest candidate
+    # within the noise margin of the slowest.
+    scan = r["estimate_cutoff_scan"]
+    assert r["estimate_cutoff_hz"] in ESTIMATE_CUTOFFS_HZ and len(scan) == len(ESTIMATE_CUTOFFS_HZ)
+    floor = scan[str(ESTIMATE_CUTOFFS_HZ[0])]
+    assert scan[str(r["estimate_cutoff_hz"])] <= floor * (1 + ESTIMATE_NOISE_MARGIN)
+    faster = [hz for hz in ESTIMATE_CUTOFFS_HZ if hz > r["estimate_cutoff_hz"]]
+    assert all(scan[str(hz)] > floor * (1 + ESTIMATE_NOISE_MARGIN) for hz in faster)

@@ -1,7 +1,7 @@
 """`python -m admittance.mujoco` as a command (issue 25): without MuJoCo it names the extra
 to install, Ctrl-C ends it with one line and exit 130, and the run folder it writes has
 ordinary permissions and finds the tip as the CLI does. The pin of the `mujoco` extra is
-the one .ci/run installs."""
+the one .ci/test installs."""
 
 import os
 import re
@@ -53,8 +53,8 @@ def test_the_extra_pins_the_mujoco_that_ci_installs():
     pyproject = (ROOT / "crates" / "python" / "pyproject.toml").read_text()
     extra = re.search(r'^mujoco\s*=\s*\["mujoco==([^"]+)"\]', pyproject, re.M)
     assert extra, "pyproject.toml has no `mujoco` extra pinning mujoco"
-    ci = re.search(r"\bmujoco==(\S+)", (ROOT / ".ci" / "run").read_text())
-    assert ci, ".ci/run does not pin mujoco"
+    ci = re.search(r"\bmujoco==(\S+)", (ROOT / ".ci" / "test").read_text())
+    assert ci, ".ci/test does not pin mujoco"
     assert extra.group(1) == ci.group(1)
 
 
@@ -72,6 +72,30 @@ def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys, tmp_path):
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "interrupted (Ctrl-C)" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "rules, expected",
+    [(["effort_saturation", "estimate_beyond_effort"], 4), (["divergence"], 1), (["hand_error", "nonfinite_metric"], 1)],
+)
+def test_a_failed_run_exits_as_admittance_run(monkeypatch, capsys, tmp_path, rules, expected):
+    """A broken health rule exits 4, a divergence or a metric not finite 1 (docs/python.md)."""
+    from admittance.mujoco import __main__ as cmd
+    from admittance.mujoco import _cosim
+
+    def failed(cfg, log=print):
+        verdicts = [{"rule": r, "severity": "failure", "message": f"{r} broken"} for r in rules]
+        return {
+            "failures": [f"variant `learned`: {r} broken" for r in rules],
+            "health": {"status": "failure", "variants": {"learned": {"verdicts": verdicts}}},
+        }
+
+    monkeypatch.setitem(sys.modules, "mujoco", types.ModuleType("mujoco"))
+    monkeypatch.setattr(_cosim, "run_cosimulation", failed)
+    code = cmd.main(["--urdf", str(PANDA), "--out", str(tmp_path / "run")])
+    assert code == expected
+    err = capsys.readouterr().err
+    assert "the run failed" in err and f"(exit {expected})" in err and rules[0] in err
 
 
 def test_ctrl_c_during_a_run(tmp_path):

@@ -169,3 +169,25 @@ pub fn datasets<'a>(
     };
     Ok((train, held_out))
 }
+
+/// Without a separate validation recording the settings are chosen on stretches of `data`
+/// itself; when its motion repeats (an excitation's base period) those stretches are motion
+/// the fit has seen. Says so on stderr and returns the period (s), or `None`.
+pub fn warn_if_repeating(path: &Path, data: &FreeMotionData, rows: usize, folds: usize) -> Option<f64> {
+    let n = data.joints.len();
+    let rows = rows.min(data.t.len());
+    if rows < 2 || n == 0 {
+        return None;
+    }
+    let dt = (data.t[rows - 1] - data.t[0]) / (rows - 1) as f64;
+    let max_lag = rows - rows / folds.max(2);
+    let lag = admittance_learning::broad::repeat_period(&data.q[..rows * n], n, max_lag)?;
+    let period = lag as f64 * dt;
+    eprintln!(
+        "admittance: warning: {}: the motion repeats every {period:.2} s, so the held-out stretches \
+         are motion the fit has seen and the expected error is optimistic; record other motion \
+         (e.g. `admittance excite ... --seed 2`) and give it as --validation",
+        path.display()
+    );
+    Some(period)
+}

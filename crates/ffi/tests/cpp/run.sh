@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The C++ test of the C ABI (issue 24; docs/ffi.md), called by .ci/run after the Rust tests:
+# The C++ test of the C ABI (issue 24; docs/ffi.md), called by .ci/test after the Rust tests:
 #   1. builds the static library and the Rust reference program (release, --locked);
 #   2. the Rust loop, closed around the simulated Baxter arm of scenarios/admittance.toml
 #      (variant `momentum`: PD, joint admittance, momentum observer), records 100,000

@@ -146,6 +146,13 @@ pub struct BroadConfig {
     /// of several values then needs a validation set.
     #[serde(default = "default_cv_folds")]
     pub cv_folds: usize,
+    /// Set to zero every output whose error on motion the fit did not see (the validation
+    /// set, or the cross-validation's pooled error) is not at least [`REQUIRED_GAIN`](super::REQUIRED_GAIN)
+    /// (2 %) below the error of predicting zero. For a residual on a nominal model (the hybrid's network) zero is the nominal
+    /// model itself: a joint where the network does not pay on unseen motion keeps the
+    /// model alone. Off by default (the paper's network has no such fallback).
+    #[serde(default)]
+    pub zero_unhelpful_outputs: bool,
     /// Rows per block when accumulating the Gram matrix (never the whole N x P pattern);
     /// capped at 256 on the packed AVX2 path, where larger blocks would leave the cache.
     pub block_rows: usize,
@@ -170,6 +177,7 @@ impl Default for BroadConfig {
             widths: WidthRule::Knn { k: 8, scale: 2.0 },
             lambda_grid: vec![1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2],
             cv_folds: default_cv_folds(),
+            zero_unhelpful_outputs: false,
             block_rows: 2048,
             threads: 0,
             gram_strategy: GramStrategy::PerThread,

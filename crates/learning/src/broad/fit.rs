@@ -85,6 +85,11 @@ pub struct FitReport {
     pub validation_rmse: Vec<f64>,
     /// Per-output training NRMSE at the chosen lambda (from the Gram terms).
     pub train_nrmse: Vec<f64>,
+    /// Outputs set to zero by `BroadConfig::zero_unhelpful_outputs` (on unseen rows they
+    /// did not remove [`REQUIRED_GAIN`] of the error of predicting zero); their validation
+    /// NRMSE and RMSE above are then those of zero.
+    #[serde(default)]
+    pub zeroed_outputs: Vec<usize>,
     /// Time per phase.
     pub times: PhaseTimes,
 }
@@ -299,10 +304,31 @@ fn fit_inner(
     let t = Instant::now();
     let Choice {
         c,
-        w,
-        validation_nrmse,
-        validation_rmse,
+        mut w,
+        mut validation_nrmse,
+        mut validation_rmse,
     } = choice;
+    let zeroed_outputs = if config.zero_unhelpful_outputs {
+        let zero_rms = match validation {
+            Some(v) if cv_folds == 0 => target_rms(v),
+            _ if cv_folds > 0 => acc_rms(&acc, n),
+            _ => Vec::new(),
+        };
+        let zeroed = unhelpful_outputs(&validation_rmse, &zero_rms);
+        // The expected error of a zeroed output is that of predicting zero.
+        for &o in &zeroed {
+            if validation_rmse[o] > 0.0 {
+                validation_nrmse[o] *= zero_rms[o] / validation_rmse[o];
+            }
+            validation_rmse[o] = zero_rms[o];
+        }
+        zeroed
+    } else {
+        Vec::new()
+    };
+    for &o in &zeroed_outputs {
+        w.as_mut().col_mut(o).fill(0.0);
+    }
     let lambda = scan[c].lambda;
     let chol = factor(acc.g.as_ref(), lambda, bias, par).ok_or_else(|| {
         BroadError::NotPositiveDefinite {
@@ -327,6 +353,7 @@ fn fit_inner(
         lambda_grid: config.lambda_grid.clone(),
         training_rows: n,
         validation_rows: validation.map_or(0, |v| v.n_samples()),
+        zeroed_outputs: zeroed_outputs.clone(),
     };
     let coverage_threshold = coverage_threshold(&fm, train, threads);
     let mut model = BroadModel {
@@ -356,9 +383,45 @@ fn fit_inner(
         validation_nrmse,
         validation_rmse,
         train_nrmse: train_e,
+        zeroed_outputs,
         times: PhaseTimes::default(),
     };
     Ok((model, report))
+}
+
+/// The share of the error of predicting zero that an output must remove on unseen rows to
+/// be kept: a smaller gain is within what another validation recording would change.
+pub const REQUIRED_GAIN: f64 = 0.02;
+
+/// Outputs whose error on unseen motion (`validation_rmse`) is not at least
+/// [`REQUIRED_GAIN`] below `zero_rms`, the error of predicting zero on the same rows (empty
+/// when either is unknown).
+fn unhelpful_outputs(validation_rmse: &[f64], zero_rms: &[f64]) -> Vec<usize> {
+    if validation_rmse.len() != zero_rms.len() {
+        return Vec::new();
+    }
+    (0..zero_rms.len())
+        .filter(|&o| validation_rmse[o] > (1.0 - REQUIRED_GAIN) * zero_rms[o])
+        .collect()
+}
+
+/// RMS of each output of `data`: the error of predicting zero.
+fn target_rms(data: &Dataset<'_>) -> Vec<f64> {
+    let d = data.d_out();
+    let mut sq = vec![0.0; d];
+    for r in data.targets().chunks_exact(d) {
+        for (s, v) in sq.iter_mut().zip(r) {
+            *s += v * v;
+        }
+    }
+    let rows = data.n_samples().max(1) as f64;
+    sq.iter().map(|s| (s / rows).sqrt()).collect()
+}
+
+/// RMS of each training target from the Gram accumulator (the pooled error of predicting
+/// zero on every stretch of the cross-validation).
+fn acc_rms(acc: &GramAcc, n: usize) -> Vec<f64> {
+    acc.y_sq.iter().map(|q| (q / n.max(1) as f64).sqrt()).collect()
 }
 
 /// Records the per-output NRMSE `e` of candidate `c` in the scan; true when its mean

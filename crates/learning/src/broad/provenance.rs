@@ -231,6 +231,10 @@ pub struct FitSettings {
     pub training_rows: usize,
     /// Validation rows (0 without validation data).
     pub validation_rows: usize,
+    /// Outputs set to zero because they did not beat zero on unseen motion
+    /// (`BroadConfig::zero_unhelpful_outputs`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub zeroed_outputs: Vec<usize>,
 }
 
 /// One incremental growth (`BroadModel::grow`).
@@ -316,6 +320,7 @@ mod tests {
                 lambda_grid: vec![1e-10, 1.0 / 3.0],
                 training_rows: 10,
                 validation_rows: 2,
+                zeroed_outputs: vec![2],
             }),
             growth: vec![GrowthRecord {
                 nodes_added: 3,

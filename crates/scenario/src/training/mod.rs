@@ -147,6 +147,7 @@ pub(crate) fn observer_network(
         "observer.training.validation",
         &spec.validation,
     )?;
+    let hybrid = scenario.observer.kind == ObserverKind::Hybrid;
     let config = BroadConfig {
         nodes: spec.nodes,
         friction: FrictionFeatures::for_observer(
@@ -159,10 +160,11 @@ pub(crate) fn observer_network(
             k: spec.width_neighbours,
             scale: spec.width_scale,
         },
+        // The hybrid's residual keeps the nominal model alone where it does not pay.
+        zero_unhelpful_outputs: hybrid,
         ..BroadConfig::default()
     };
     // The key: data identities, the target, every fit setting.
-    let hybrid = scenario.observer.kind == ObserverKind::Hybrid;
     let target = match (hybrid, &nominal) {
         (true, Some(Nominal::Urdf(_))) => {
             format!("hybrid:{}", scenario.observer.nominal_inertia_scale)

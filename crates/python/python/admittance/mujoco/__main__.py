@@ -49,11 +49,19 @@ def _main(argv):
     p.add_argument("--variant", "--variants", dest="variant", action="append", metavar="NAME",
                    help="a variant to run, repeated for more (or comma-separated), of " + ", ".join(VARIANTS)
                    + " (default: all, in this order)")
+    p.add_argument("--training-motion", choices=["excitation", "multisine"], default="excitation",
+                   help="free-motion data on the optimised excitation (default) or on a multi-sine about the pose (the recipe before issue 22)")
+    p.add_argument("--hybrid-nominal", choices=["identified", "nominal"], default="identified",
+                   help="the hybrid on the identification (default) or on the 0.8-inertia URDF (before issue 22)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--force", action="store_true", help="replace an --out folder this tool did not write")
     a = p.parse_args(argv)
+    # Without the identification (--hybrid-nominal nominal) there is no momentum_identified.
+    default = VARIANTS if a.hybrid_nominal == "identified" else [v for v in VARIANTS if v != "momentum_identified"]
+    if a.hybrid_nominal == "nominal" and a.variant and any("momentum_identified" in v for v in a.variant):
+        p.error("--variant momentum_identified needs the identification: drop --hybrid-nominal nominal")
     variants = []
-    for v in (name for arg in (a.variant or VARIANTS) for name in arg.split(",") if name):
+    for v in (name for arg in (a.variant or default) for name in arg.split(",") if name):
         if v not in variants:
             variants.append(v)
     unknown = [v for v in variants if v not in VARIANTS]
@@ -74,6 +82,7 @@ def _main(argv):
         urdf=a.urdf, base=a.base, tip=a.tip, out=a.out, contact=a.contact, duration=a.duration,
         training_duration=a.training_duration, validation_duration=a.validation_duration,
         nodes=a.nodes, friction_scale=a.friction_scale, push_force=a.push_force, width_scale=a.width_scale, seed=a.seed, force=a.force, variants=variants,
+        training_motion=a.training_motion, hybrid_nominal=a.hybrid_nominal,
     )
     try:
         summary = run_cosimulation(cfg, log=lambda s: print(s, file=sys.stderr))
@@ -81,8 +90,18 @@ def _main(argv):
         print(f"admittance.mujoco: {e}", file=sys.stderr)
         return 3
     if summary["failures"]:
-        print("admittance.mujoco: the run failed: " + "; ".join(summary["failures"]) + f"; {a.out} holds what ran", file=sys.stderr)
-        return 1
+        # As `admittance run`: 1 when a variant's numbers are not usable (it diverged or a
+        # metric is not finite), 4 when the run finished but broke another health rule.
+        stopping = {"divergence", "nonfinite_metric"}
+        rules = {
+            v.get("rule")
+            for h in summary.get("health", {}).get("variants", {}).values()
+            for v in h.get("verdicts", [])
+            if v.get("severity") == "failure"
+        }
+        code = 1 if rules & stopping or not rules else 4
+        print("admittance.mujoco: the run failed: " + "; ".join(summary["failures"]) + f"; {a.out} holds what ran (exit {code})", file=sys.stderr)
+        return code
     print(f"wrote {a.out}", file=sys.stderr)
     return 0
 

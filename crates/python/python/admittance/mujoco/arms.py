@@ -21,7 +21,7 @@ def main(argv=None):
     p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0)
     p.add_argument("--input-filter-hz", type=float, default=10.0)
-    p.add_argument("--estimate-cutoff-hz", type=float, default=5.0, help="the estimate's low-pass, as the co-simulation's (5)")
+    p.add_argument("--estimate-cutoff-hz", type=float, default=0.0, help="the estimate's low-pass, Hz (0: chosen per arm on the validation recording among 5, 10, 20, 40)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
     a = p.parse_args(argv)

@@ -1,0 +1,295 @@
+//! `admittance identify` and `admittance evaluate`: on a synthetic arm whose truth is known
+//! (judged on other motion), their refusals, and on the real Baxter recording when
+//! `ADMITTANCE_DATA` names the folder holding `baxter_rand/` (.ci/test sets it): trained on
+//! the first 120 s, judged on the last 30 s, the bar of issue 22.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn admittance(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_admittance"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// The row of `evaluate`'s table named `name`: (rms, nMSE).
+fn row(table: &str, name: &str) -> (f64, f64) {
+    let line = table
+        .lines()
+        .find(|l| l.starts_with(name))
+        .unwrap_or_else(|| panic!("no row {name} in\n{table}"));
+    let nums: Vec<f64> = line[name.len()..]
+        .split_whitespace()
+        .take(2)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    (nums[0], nums[1])
+}
+
+/// Free motion of the Baxter model with friction it does not know, as a CSV.
+fn synthetic_csv(dir: &Path, seed: f64, seconds: f64) -> PathBuf {
+    use admittance_dynamics::{rnea, Data, Model};
+    let model = Model::from_urdf_file(
+        &root().join("models/baxter_left_arm.urdf"),
+        Some("base"),
+        Some("left_hand"),
+    )
+    .unwrap();
+    let names: Vec<String> = model.joint_names().map(String::from).collect();
+    let mut csv = String::from("t");
+    for s in ["q", "qdot", "qddot", "tau"] {
+        for j in &names {
+            csv += &format!(",{s}.{j}");
+        }
+    }
+    csv.push('\n');
+    let mut data = Data::new(&model);
+    for k in 0..(seconds * 200.0) as usize {
+        let t = k as f64 / 200.0;
+        let (mut q, mut qd, mut qdd) = (vec![0.0; 7], vec![0.0; 7], vec![0.0; 7]);
+        for i in 0..7 {
+            for h in 1..=3 {
+                let w = 2.0
+                    * std::f64::consts::PI
+                    * (0.11 * h as f64 + 0.03 * i as f64)
+                    * (1.0 + 0.2 * seed);
+                let (a, ph) = (0.5 / h as f64, seed * (1 + i + h) as f64);
+                q[i] += a * (w * t + ph).sin();
+                qd[i] += a * w * (w * t + ph).cos();
+                qdd[i] -= a * w * w * (w * t + ph).sin();
+            }
+        }
+        let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
+        csv += &format!("{t}");
+        for v in q.iter().chain(&qd).chain(&qdd) {
+            csv += &format!(",{v}");
+        }
+        for i in 0..7 {
+            csv += &format!(",{}", tau[i] + 1.5 * qd[i] + 0.8 * (qd[i] / 0.01).tanh());
+        }
+        csv.push('\n');
+    }
+    let path = dir.join(format!("free_{seed}.csv"));
+    std::fs::write(&path, csv).unwrap();
+    path
+}
+
+#[test]
+fn identify_then_evaluate_on_other_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let (train, other) = (
+        synthetic_csv(dir.path(), 0.3, 30.0),
+        synthetic_csv(dir.path(), 1.9, 10.0),
+    );
+    let out = dir.path().join("baxter.ident.json");
+    let o = admittance(&[
+        "identify",
+        "--data",
+        train.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("blocked cross-validation"),
+        "{}",
+        text(&o)
+    );
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        other.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--identification",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = text(&o);
+    let (urdf_rms, _) = row(&table, "URDF (RNEA)");
+    let (ident_rms, _) = row(&table, "identified + joint terms");
+    let (momentum_rms, _) = row(&table, "momentum (identified)");
+    assert!(ident_rms < 0.02 * urdf_rms, "{table}");
+    assert!(momentum_rms < 0.1 * urdf_rms, "{table}");
+    // Another arm's identification is refused, naming the fix.
+    let panda = root().join("models/franka_panda.urdf");
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        other.to_str().unwrap(),
+        "--urdf",
+        panda.to_str().unwrap(),
+        "--identification",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    // A user's file is never overwritten.
+    let mine = dir.path().join("notes.json");
+    std::fs::write(&mine, "{}").unwrap();
+    let o = admittance(&[
+        "identify",
+        "--data",
+        train.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--out",
+        mine.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
+}
+
+#[test]
+fn real_baxter_held_out_meets_the_bar() {
+    let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {
+        eprintln!("skipped: ADMITTANCE_DATA is not set (the folder holding baxter_rand/)");
+        return;
+    };
+    let data = PathBuf::from(dir).join("baxter_rand/baxter_rand.csv");
+    assert!(
+        data.exists(),
+        "ADMITTANCE_DATA is set but {} is missing",
+        data.display()
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("baxter.ident.json");
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let (d, u, o) = (
+        data.to_str().unwrap(),
+        urdf.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    let r = admittance(&[
+        "identify",
+        "--data",
+        d,
+        "--urdf",
+        u,
+        "--until",
+        "120",
+        "--input-filter-hz",
+        "4",
+        "--out",
+        o,
+    ]);
+    assert!(r.status.success(), "{}", text(&r));
+    let r = admittance(&[
+        "evaluate",
+        "--data",
+        d,
+        "--urdf",
+        u,
+        "--from",
+        "120",
+        "--input-filter-hz",
+        "4",
+        "--identification",
+        o,
+    ]);
+    assert!(r.status.success(), "{}", text(&r));
+    let table = text(&r);
+    eprintln!("{table}");
+    for name in ["identified + joint terms", "momentum (identified)"] {
+        let (rms, nmse) = row(&table, name);
+        assert!(
+            rms <= 1.0 && nmse <= 0.4,
+            "{name}: {rms} N m, nMSE {nmse}\n{table}"
+        );
+    }
+}
+
+#[test]
+fn a_scenario_runs_its_momentum_observer_on_an_identification() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let train = synthetic_csv(dir.path(), 0.7, 20.0);
+    let ident = dir.path().join("baxter.ident.json");
+    let o = admittance(&[
+        "identify",
+        "--data",
+        train.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--out",
+        ident.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let scenario = root().join("scenarios/admittance.toml");
+    let set = format!("observer.identification=\"{}\"", ident.display());
+    let out = dir.path().join("run");
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        &set,
+        "--set",
+        "duration=3",
+        "--set",
+        "evaluation_start=1",
+        "--set",
+        "observer.nominal_inertia_scale=1",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("momentum"), "{summary}");
+    assert!(std::fs::read_to_string(out.join("scenario.toml"))
+        .unwrap()
+        .contains("identification"));
+    // The hybrid would need a network trained on the identification's residual: refused,
+    // naming the key, before any training.
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "hybrid",
+        "--set",
+        &set,
+        "--set",
+        "duration=3",
+        "--out",
+        dir.path().join("run2").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("observer.identification"), "{}", text(&o));
+    // Another arm's identification is refused at the same key.
+    let panda_ident = dir.path().join("missing.ident.json");
+    let o = admittance(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--variant",
+        "momentum",
+        "--set",
+        &format!("observer.identification=\"{}\"", panda_ident.display()),
+        "--set",
+        "duration=3",
+        "--set",
+        "observer.nominal_inertia_scale=1",
+        "--out",
+        dir.path().join("run3").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("observer.identification"), "{}", text(&o));
+}

@@ -1,0 +1,19 @@
+//! The integration tests of this crate as one test binary (one link instead of one per
+//! file: the test build is the longest part of a fresh clone's test command). Tests
+//! that install a counting global allocator stay binaries of their own beside it.
+
+mod dynamics_cli;
+mod excite_cli;
+mod gains_health_cli;
+mod identify_cli;
+mod import_cli;
+mod reliability;
+mod report_cli;
+mod ros2_cli;
+mod run_arm;
+mod run_cli;
+mod run_safety;
+mod run_variants_interrupt;
+mod train_cli;
+mod train_safety;
+mod train_validation;

@@ -1,0 +1,261 @@
+//! Identification recovers an arm it could describe, judged on motion it never saw, keeps
+//! bodies physically possible, and its files round-trip and refuse damage.
+
+use crate::common;
+use std::collections::BTreeMap;
+
+use admittance_dynamics::*;
+
+/// A multi-sine motion (each joint its own frequencies, from `seed`) inside +-0.8 rad of
+/// the middle of the joint's range, sampled at 200 Hz for `seconds`.
+fn motion(model: &Model, seed: f64, seconds: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let n = model.nq();
+    let steps = (seconds * 200.0) as usize;
+    let (mut q, mut qd, mut qdd) = (vec![], vec![], vec![]);
+    for k in 0..steps {
+        let t = k as f64 / 200.0;
+        for (i, j) in model.joints.iter().enumerate() {
+            let mid = if j.limits.lower.is_finite() {
+                0.5 * (j.limits.lower + j.limits.upper)
+            } else {
+                0.0
+            };
+            let (mut p, mut v, mut a) = (mid, 0.0, 0.0);
+            for h in 1..=3 {
+                let w = 2.0
+                    * std::f64::consts::PI
+                    * (0.1 + 0.13 * h as f64 + 0.017 * i as f64)
+                    * (1.0 + 0.3 * seed);
+                let amp = 0.8 / (3.0 * h as f64).sqrt() / 1.2;
+                let ph = seed * (i + 2 * h) as f64;
+                p += amp * (w * t + ph).sin();
+                v += amp * w * (w * t + ph).cos();
+                a -= amp * w * w * (w * t + ph).sin();
+            }
+            q.push(p);
+            qd.push(v);
+            qdd.push(a);
+        }
+    }
+    let _ = n;
+    (q, qd, qdd)
+}
+
+fn truth_terms(n: usize) -> Vec<JointTerms> {
+    (0..n)
+        .map(|i| JointTerms {
+            armature: 0.05 + 0.01 * i as f64,
+            viscous: 1.0 + 0.2 * i as f64,
+            coulomb: [2.0 - 0.1 * i as f64, 0.5],
+            coulomb_width: 0.01,
+            offset: 0.3 * (i as f64 - 3.0),
+            spring: if i == 1 {
+                [0.0, 8.0, 0.0, -2.0]
+            } else {
+                [0.0; 4]
+            },
+        })
+        .collect()
+}
+
+fn torques(model: &Model, terms: &[JointTerms], q: &[f64], qd: &[f64], qdd: &[f64]) -> Vec<f64> {
+    let n = model.nq();
+    let mut data = Data::new(model);
+    let mut out = Vec::with_capacity(q.len());
+    for k in 0..q.len() / n {
+        let r = k * n..(k + 1) * n;
+        let tau = rnea(
+            model,
+            &mut data,
+            &q[r.clone()],
+            &qd[r.clone()],
+            &qdd[r.clone()],
+        )
+        .unwrap();
+        for i in 0..n {
+            out.push(tau[i] + terms[i].torque(q[k * n + i], qd[k * n + i], qdd[k * n + i]));
+        }
+    }
+    out
+}
+
+fn rms(a: &[f64], b: &[f64]) -> f64 {
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+}
+
+#[test]
+fn recovers_an_arm_on_motion_it_never_saw() {
+    let urdf = common::baxter();
+    // The truth: heavier links than the URDF says, and friction, springs, rotor inertia.
+    let truth = urdf
+        .with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
+        .unwrap();
+    let terms = truth_terms(7);
+    let (q, qd, qdd) = motion(&urdf, 0.3, 30.0);
+    let tau = torques(&truth, &terms, &q, &qd, &qdd);
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: 7,
+    };
+    let ident = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
+    // Other motion: other frequencies and phases.
+    let (q2, qd2, qdd2) = motion(&urdf, 1.7, 20.0);
+    let tau2 = torques(&truth, &terms, &q2, &qd2, &qdd2);
+    let mut data = Data::new(&ident.model);
+    let mut pred = Vec::new();
+    let mut out = [0.0; 7];
+    for k in 0..q2.len() / 7 {
+        let r = k * 7..(k + 1) * 7;
+        ident
+            .predict(
+                &mut data,
+                &q2[r.clone()],
+                &qd2[r.clone()],
+                &qdd2[r.clone()],
+                &mut out,
+            )
+            .unwrap();
+        pred.extend_from_slice(&out);
+    }
+    let urdf_pred = torques(
+        &urdf,
+        &vec![
+            JointTerms {
+                coulomb_width: 0.01,
+                ..Default::default()
+            };
+            7
+        ],
+        &q2,
+        &qd2,
+        &qdd2,
+    );
+    let (ours, prior) = (rms(&pred, &tau2), rms(&urdf_pred, &tau2));
+    eprintln!(
+        "new motion rms: identified {ours:.4} N m, URDF {prior:.3} N m; {:?}",
+        ident.summary
+    );
+    assert!(ours < 0.02 * prior, "identified {ours} vs URDF {prior}");
+    assert!(
+        ident.summary.springs[1],
+        "joint 1's spring was found: {:?}",
+        ident.summary.springs
+    );
+    for (b, body) in ident.model.bodies.iter().enumerate() {
+        assert!(is_physically_consistent(body), "body {b}: {body:?}");
+    }
+    assert!(
+        ident
+            .summary
+            .expected_false_torque_rms
+            .iter()
+            .all(|e| *e < 0.1),
+        "{:?}",
+        ident.summary.expected_false_torque_rms
+    );
+    assert!(ident.summary.base_parameters > 7 && ident.summary.base_parameters < 70);
+}
+
+#[test]
+fn noisy_torques_are_not_fitted_to_the_noise() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.9, 40.0);
+    let mut tau = torques(&urdf, &truth_terms(7), &q, &qd, &qdd);
+    // Deterministic pseudo-noise, 1 N m.
+    for (k, t) in tau.iter_mut().enumerate() {
+        *t += ((k as f64 * 12.9898).sin() * 43758.5453).rem_euclid(1.0) * 2.0 - 1.0;
+    }
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: 7,
+    };
+    let ident = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
+    // Held-out error is about the noise (uniform on +-1: rms 0.577), not below it.
+    for e in &ident.summary.expected_false_torque_rms {
+        assert!(
+            *e > 0.5 && *e < 0.8,
+            "{:?}",
+            ident.summary.expected_false_torque_rms
+        );
+    }
+}
+
+#[test]
+fn bad_samples_and_settings_are_named() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.3, 2.0);
+    let mut tau = vec![0.0; q.len()];
+    tau[7 * 10 + 3] = f64::NAN;
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: 7,
+    };
+    let e = identify(&urdf, &train, None, &IdentificationSettings::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tau of joint 3 at sample 10"), "{e}");
+    let short = Samples {
+        q: &q[..6],
+        ..train
+    };
+    assert!(identify(&urdf, &short, None, &IdentificationSettings::default()).is_err());
+    let bad = IdentificationSettings {
+        folds: 1,
+        ..Default::default()
+    };
+    let e = identify(&urdf, &train, None, &bad).unwrap_err().to_string();
+    assert!(e.contains("folds"), "{e}");
+}
+
+#[test]
+fn files_round_trip_and_refuse_damage_and_other_arms() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.5, 20.0);
+    let tau = torques(&urdf, &truth_terms(7), &q, &qd, &qdd);
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: 7,
+    };
+    let ident = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("baxter.ident.json");
+    let mut data = BTreeMap::new();
+    data.insert("data".into(), serde_json::json!("synthetic"));
+    ident.save(&path, &urdf, data.clone()).unwrap();
+    let back = Identification::load(&path, &urdf).unwrap();
+    assert_eq!(back.joint_terms, ident.joint_terms);
+    assert_eq!(
+        inertial_parameters(&back.model),
+        inertial_parameters(&ident.model)
+    );
+    let (again, model) = Identification::load_with_urdf(&path).unwrap();
+    assert_eq!(model.fingerprint(), urdf.fingerprint());
+    assert_eq!(again.summary, ident.summary);
+    // Another arm is refused.
+    let other = urdf.with_scaled_inertias(2.0).unwrap();
+    let e = Identification::load(&path, &other).unwrap_err().to_string();
+    assert!(e.contains("another arm"), "{e}");
+    // A changed number is caught by the checksum.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let tampered = text.replacen("\"ridge\": ", "\"ridge\": 1", 1);
+    std::fs::write(&path, tampered).unwrap();
+    let e = Identification::load(&path, &urdf).unwrap_err().to_string();
+    assert!(e.contains("checksum"), "{e}");
+    // A user's file is not overwritten.
+    let user = dir.path().join("notes.json");
+    std::fs::write(&user, "{\"mine\": 1}").unwrap();
+    assert!(ident.save(&user, &urdf, data).is_err());
+    assert_eq!(std::fs::read_to_string(&user).unwrap(), "{\"mine\": 1}");
+}
