@@ -106,7 +106,7 @@ fn inverse_learns_the_edges_within_its_bounds_and_lowers_the_error() {
     eprintln!("joint 0 rms over 20-30 s: with inverse {rw:.2e}, network only {ro:.2e}");
     // On this arm the paper's network already removes most of the deadzone's effect (no
     // sensor noise, a slow motion); the inverse must not make it worse. Its benefit on
-    // experiment A is asserted in crates/sim/tests/scenarios.rs.
+    // experiment A is asserted in crates/scenario/tests/it/scenarios.rs.
     assert!(rw < ro, "inverse {rw:.2e} vs network only {ro:.2e}");
     // Joint 0's torque is mostly on one side of the gap here: that edge is learned.
     assert!(e[1] < -0.2, "edges learned: {e:?}");

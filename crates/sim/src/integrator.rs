@@ -14,7 +14,7 @@
 //!   in velocity), the scheme of the side-by-side timing. First order; symplectic for a
 //!   constant mass matrix, but not exactly with `M(q)` in this velocity form: the energy
 //!   error of the free, frictionless Baxter arm is O(h) and grows slowly (1.5e-2 of the
-//!   kinetic energy over 2 s at 5 kHz, `tests/plant_energy.rs`).
+//!   kinetic energy over 2 s at 5 kHz, `tests/it/plant_energy.rs`).
 //! * [`Integrator::Rk4Split`] (default): without dissipative terms, the classical
 //!   fourth-order Runge-Kutta step of
 //!   `(M + M_E) qddot = D(tau) + tau_spring + tau_ext,explicit - C qdot - G` (the free
