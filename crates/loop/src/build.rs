@@ -110,9 +110,11 @@ fn estimate_source<Training>(
         input_filter_hz: spec.input_filter_hz,
         cutoff_hz: spec.cutoff_hz,
         warmup: spec.warmup,
-        // The learned networks were trained on the filtered command one sample late
-        // (the pairing with q'' of the free-motion data, docs/outputs.md).
-        delayed_torque: spec.kind.is_learned(),
+        // The paper's learned networks map the state to the torque and were trained on the
+        // filtered command one sample late (the pairing with q'' of the free-motion data,
+        // docs/outputs.md). The hybrid's network only corrects the momentum observer, which
+        // takes this period's torque as the momentum stage does.
+        delayed_torque: spec.kind == ObserverKind::Learned,
         rate_hz: config.control_rate_hz,
     };
     Ok(EstimateSource::Observer(Box::new(ObserverStage::new(
