@@ -104,10 +104,10 @@ pub use greville::{greville_add_columns, pseudo_inverse, PinvState};
 pub use growth::{GrowthReport, GrowthSpec};
 pub use io::{fnv1a64, FORMAT_NAME, FORMAT_VERSION};
 pub use kernels::exp_nonpositive_slice;
-pub use repeats::repeat_period;
 pub use limits::{format_bytes, Budget, DEFAULT_MAX_FLOP, DEFAULT_MAX_MEMORY_BYTES};
 pub use model::{BroadModel, Workspace};
 pub use provenance::{
     ArmCheck, ArmIdentity, CentreSettings, DataSettings, FitSettings, GrowthRecord, Provenance,
     TrainingTarget, ValidationSplit,
 };
+pub use repeats::repeat_period;

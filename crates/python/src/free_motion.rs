@@ -188,7 +188,10 @@ pub(crate) fn training_arrays(
 /// data itself; when its motion repeats those stretches are motion the fit has seen. The
 /// period in samples of the rows `x` (`[q, qdot, qddot]`, `n` joints), if any.
 pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option<usize> {
-    let q: Vec<f64> = x.chunks_exact(3 * n).flat_map(|r| r[..n].iter().copied()).collect();
+    let q: Vec<f64> = x
+        .chunks_exact(3 * n)
+        .flat_map(|r| r[..n].iter().copied())
+        .collect();
     let rows = q.len() / n.max(1);
     admittance_learning::broad::repeat_period(&q, n, rows - rows / folds.max(2))
 }

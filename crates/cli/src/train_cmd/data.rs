@@ -173,7 +173,12 @@ pub fn datasets<'a>(
 /// Without a separate validation recording the settings are chosen on stretches of `data`
 /// itself; when its motion repeats (an excitation's base period) those stretches are motion
 /// the fit has seen. Says so on stderr and returns the period (s), or `None`.
-pub fn warn_if_repeating(path: &Path, data: &FreeMotionData, rows: usize, folds: usize) -> Option<f64> {
+pub fn warn_if_repeating(
+    path: &Path,
+    data: &FreeMotionData,
+    rows: usize,
+    folds: usize,
+) -> Option<f64> {
     let n = data.joints.len();
     let rows = rows.min(data.t.len());
     if rows < 2 || n == 0 {

@@ -147,10 +147,11 @@ pub struct BroadConfig {
     #[serde(default = "default_cv_folds")]
     pub cv_folds: usize,
     /// Set to zero every output whose error on motion the fit did not see (the validation
-    /// set, or the cross-validation's pooled error) is not at least [`REQUIRED_GAIN`](super::REQUIRED_GAIN)
-    /// (2 %) below the error of predicting zero. For a residual on a nominal model (the hybrid's network) zero is the nominal
-    /// model itself: a joint where the network does not pay on unseen motion keeps the
-    /// model alone. Off by default (the paper's network has no such fallback).
+    /// set, or the cross-validation's pooled error) is not at least
+    /// [`REQUIRED_GAIN`](super::REQUIRED_GAIN) (2 %) below the error of predicting zero. For
+    /// a residual on a nominal model (the hybrid's network) zero is the nominal model
+    /// itself: a joint where the network does not pay on unseen motion keeps the model
+    /// alone. Off by default (the paper's network has no such fallback).
     #[serde(default)]
     pub zero_unhelpful_outputs: bool,
     /// Rows per block when accumulating the Gram matrix (never the whole N x P pattern);

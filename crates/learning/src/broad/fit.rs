@@ -421,7 +421,10 @@ fn target_rms(data: &Dataset<'_>) -> Vec<f64> {
 /// RMS of each training target from the Gram accumulator (the pooled error of predicting
 /// zero on every stretch of the cross-validation).
 fn acc_rms(acc: &GramAcc, n: usize) -> Vec<f64> {
-    acc.y_sq.iter().map(|q| (q / n.max(1) as f64).sqrt()).collect()
+    acc.y_sq
+        .iter()
+        .map(|q| (q / n.max(1) as f64).sqrt())
+        .collect()
 }
 
 /// Records the per-output NRMSE `e` of candidate `c` in the scan; true when its mean

@@ -22,10 +22,7 @@ pub fn repeat_period(positions: &[f64], width: usize, max_lag: usize) -> Option<
     }
     let rows = positions.len() / width;
     let step = (rows / DECIMATED_ROWS).max(1);
-    let x: Vec<&[f64]> = positions
-        .chunks_exact(width)
-        .step_by(step)
-        .collect();
+    let x: Vec<&[f64]> = positions.chunks_exact(width).step_by(step).collect();
     let len = x.len();
     if len < 8 {
         return None;
@@ -94,7 +91,10 @@ mod tests {
         // Base period 10 s: 0.1 Hz and 0.3 Hz, 60 s at 1 kHz.
         let p = rows(60_000, |t| {
             let w = std::f64::consts::TAU * 0.1;
-            [(w * t).sin() + 0.3 * (3.0 * w * t).cos(), (2.0 * w * t).sin()]
+            [
+                (w * t).sin() + 0.3 * (3.0 * w * t).cos(),
+                (2.0 * w * t).sin(),
+            ]
         });
         let lag = repeat_period(&p, 2, 48_000).expect("periodic");
         assert!((lag as f64 - 10_000.0).abs() <= 30.0, "{lag}");
@@ -104,7 +104,10 @@ mod tests {
     fn motion_that_does_not_repeat_is_not_flagged() {
         // Incommensurate frequencies and a slow drift: never the same motion again.
         let p = rows(60_000, |t| {
-            [(1.3 * t).sin() + 0.02 * t, (std::f64::consts::SQRT_2 * t).cos()]
+            [
+                (1.3 * t).sin() + 0.02 * t,
+                (std::f64::consts::SQRT_2 * t).cos(),
+            ]
         });
         assert_eq!(repeat_period(&p, 2, 48_000), None);
         assert_eq!(repeat_period(&[1.0, 2.0, 3.0, 4.0], 2, 10), None);
