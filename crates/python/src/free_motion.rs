@@ -186,14 +186,20 @@ pub(crate) fn training_arrays(
 
 /// Without a separate validation recording the settings are chosen on stretches of the
 /// data itself; when its motion repeats those stretches are motion the fit has seen. The
-/// period in samples of the rows `x` (`[q, qdot, qddot]`, `n` joints), if any.
+/// period in samples of the joint angles `q` (row-major, `n` joints), if any, looking as far
+/// as a cross-validation over `folds` stretches would hold out.
+pub(crate) fn repeat_period_of_positions(q: &[f64], n: usize, folds: usize) -> Option<usize> {
+    let rows = q.len() / n.max(1);
+    admittance_learning::broad::repeat_period(q, n, rows - rows / folds.max(2))
+}
+
+/// [`repeat_period_of_positions`] of the training rows `x` (`[q, qdot, qddot]`).
 pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option<usize> {
     let q: Vec<f64> = x
         .chunks_exact(3 * n)
         .flat_map(|r| r[..n].iter().copied())
         .collect();
-    let rows = q.len() / n.max(1);
-    admittance_learning::broad::repeat_period(&q, n, rows - rows / folds.max(2))
+    repeat_period_of_positions(&q, n, folds)
 }
 
 /// Warns (Python `UserWarning`) that `arg`'s motion repeats every `period` samples.

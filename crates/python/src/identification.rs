@@ -109,10 +109,9 @@ pub fn identify(
         ..Default::default()
     };
     if validation.is_none() {
-        let n = urdf.nq().max(1);
-        let rows = train.q.len() / n;
-        let max_lag = rows - rows / settings.folds.max(2);
-        if let Some(period) = admittance_learning::broad::repeat_period(&train.q, n, max_lag) {
+        let period =
+            crate::free_motion::repeat_period_of_positions(&train.q, urdf.nq(), settings.folds);
+        if let Some(period) = period {
             crate::free_motion::warn_repeating(py, "data", period)?;
         }
     }
