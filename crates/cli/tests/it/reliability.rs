@@ -21,8 +21,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+/// The checkout the test runs in: cargo's run-time `CARGO_MANIFEST_DIR` first, because
+/// docs/reliability.md's commands also run from copies of the checkout that share its
+/// `target/` (scripts/doc_commands.py), where the compile-time path may be another copy's.
 fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+    std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+        .join("../..")
 }
 
 fn cases(default: usize) -> usize {
