@@ -11,7 +11,8 @@
 # 3. Builds our timing program: cargo build --release -p admittance-dynamics --example timing
 #    (skipped, with a note, while crates/dynamics/examples/timing.rs does not exist).
 # 4. Runs both alternately, ROUNDS times (ours, pinocchio, ours, pinocchio, ...); each run
-#    prints "<algorithm> <median ns per call>"; the table shows the median over rounds.
+#    prints "<algorithm> <median ns per call>"; the table shows the median over rounds, and
+#    the ratio of each side's fastest round (the least disturbed on a shared machine).
 #
 # Environment: ROUNDS (default 3); STATES (default 1000), BATCHES (default 1000) and PER_BATCH
 # (default 100) for the Pinocchio program (see pinocchio_timing.cpp: short batches keep the
@@ -109,6 +110,12 @@ for r in $(seq 1 "$ROUNDS"); do
     "$PIN_BIN" "$URDF" "$TIP" "$STATES" "$BATCHES" "$PER_BATCH" > "$RUNS/pin.$r" 2> "$RUNS/pinerr.$r"
 done
 
+# fastest round of one algorithm's figures in files $2.* (the round least disturbed by
+# other work on a shared machine)
+best_of() {
+    cat "$RUNS/$2".[0-9]* 2>/dev/null | awk -v a="$1" '$1 == a { print $2 }' | sort -g | head -n 1
+}
+
 # median over rounds of one algorithm's figures in files $2.*
 median_of() {
     local algo="$1" side="$2"
@@ -123,14 +130,17 @@ echo "URDF: $URDF   tip: $TIP   rounds: $ROUNDS (median of per-run medians)"
 echo "CPU: ${CPU:-unknown} ($(nproc) cores)"
 grep -h '^# pinocchio' "$RUNS"/pinerr.1 | sed 's/^# /Pinocchio: /' || true
 echo
-printf '%-10s | %10s | %15s | %18s\n' algorithm "ours (us)" "pinocchio (us)" "ratio ours/pin"
-printf '%-10s-+-%10s-+-%15s-+-%18s\n' ---------- ---------- --------------- ------------------
+printf '%-10s | %10s | %15s | %18s | %18s\n' algorithm "ours (us)" "pinocchio (us)" "ratio ours/pin" "best rounds ratio"
+printf '%-10s-+-%10s-+-%15s-+-%18s-+-%18s\n' ---------- ---------- --------------- ------------------ ------------------
 for a in $ALGOS; do
     o="$(median_of "$a" ours)"
     p="$(median_of "$a" pin)"
-    awk -v a="$a" -v o="$o" -v p="$p" 'BEGIN {
+    bo="$(best_of "$a" ours)"
+    bp="$(best_of "$a" pin)"
+    awk -v a="$a" -v o="$o" -v p="$p" -v bo="${bo:--}" -v bp="${bp:--}" 'BEGIN {
         os = (o == "-") ? "-" : sprintf("%.3f", o / 1000);
         ps = (p == "-") ? "-" : sprintf("%.3f", p / 1000);
         rs = (o == "-" || p == "-" || p == 0) ? "-" : sprintf("%.2f", o / p);
-        printf "%-10s | %10s | %15s | %18s\n", a, os, ps, rs }'
+        bs = (bo == "-" || bp == "-" || bp == 0) ? "-" : sprintf("%.2f", bo / bp);
+        printf "%-10s | %10s | %15s | %18s | %18s\n", a, os, ps, rs, bs }'
 done

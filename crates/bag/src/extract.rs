@@ -57,6 +57,9 @@ pub struct Collector<'p> {
     topics: BTreeMap<String, TopicCount>,
     flat: HashMap<String, FlatSchema>,
     skips: BTreeMap<(String, String), Skip>,
+    /// Values kept so far, against the memory budget.
+    values: u128,
+    messages: usize,
 }
 
 /// The decoded series and what was seen on the way.
@@ -69,6 +72,8 @@ pub struct Extracted {
     pub topics: Vec<TopicCount>,
     /// Skipped messages, by topic and reason.
     pub skips: Vec<Skip>,
+    /// What the report should say besides (an optional label topic absent from the bag).
+    pub notes: Vec<String>,
 }
 
 impl<'p> Collector<'p> {
@@ -95,6 +100,8 @@ impl<'p> Collector<'p> {
             topics: BTreeMap::new(),
             flat: HashMap::new(),
             skips: BTreeMap::new(),
+            values: 0,
+            messages: 0,
         }
     }
 
@@ -123,6 +130,7 @@ impl<'p> Collector<'p> {
                 messages: 0,
             });
         count.messages += 1;
+        self.messages += 1;
         let wanted: Vec<usize> = (0..self.signals.len())
             .filter(|i| self.signals[*i].source.topic == m.topic)
             .collect();
@@ -135,6 +143,7 @@ impl<'p> Collector<'p> {
         match self.decode(m, &wanted)? {
             Ok(samples) => {
                 for (i, (stamp, names, values)) in wanted.into_iter().zip(samples) {
+                    self.values += values.len() as u128;
                     let s = &mut self.signals[i];
                     let stamp_ns = s.time.choose(stamp, m.log_time);
                     s.samples.push(RawSample {
@@ -146,6 +155,17 @@ impl<'p> Collector<'p> {
                 }
             }
             Err((reason, detail)) => self.skip(m.topic, reason, m.log_time, detail),
+        }
+        if self.values > crate::import::MAX_TABLE_VALUES {
+            return Err(BagError::Data {
+                bag: self.bag.clone(),
+                message: format!(
+                    "the profile's topics hold more than {} values by message {} (log time {:.3} s): above the import's memory budget; import a shorter recording (record with `ros2 bag record --max-bag-duration SECONDS` and import each .mcap file on its own)",
+                    crate::import::MAX_TABLE_VALUES,
+                    self.messages,
+                    m.log_time as f64 * 1e-9
+                ),
+            });
         }
         Ok(())
     }

@@ -14,10 +14,23 @@ use crate::resample::{self, Table};
 pub struct ImportOptions {
     /// Output rate (Hz); `None`: the median rate of the `q` topic.
     pub rate_hz: Option<f64>,
-    /// Keep the messages before damaged MCAP data (a truncated recording) instead of
-    /// failing; the damage is listed in the report.
+    /// Skip damaged MCAP chunks and keep the messages before the end of a truncated
+    /// recording instead of failing; the damage is listed and counted in the report.
     pub accept_damage: bool,
+    /// Import a recording (or an output rate) under [`MIN_RATE_HZ`] with a warning in the
+    /// report instead of refusing it.
+    pub accept_low_rate: bool,
 }
+
+/// The lowest rate the loop can use (Hz): its observers differentiate the measured angles
+/// at the control rate (docs/method.md); 10-50 Hz learning data sets are too coarse.
+pub const MIN_RATE_HZ: f64 = 200.0;
+
+/// The memory budget: the values decoded from the bag (checked while it is streamed) and
+/// the table's rows x columns (t, the four joint blocks, the label columns and the stamp,
+/// checked before the resampling allocates anything) at most this many each (50 million
+/// f64 = 400 MB).
+pub const MAX_TABLE_VALUES: u128 = 50_000_000;
 
 /// The table and what was done to get it.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,15 +49,30 @@ pub fn import(
 ) -> Result<Imported, BagError> {
     let files = crate::source::locate(bag)?;
     let mut collector = Collector::new(bag, profile);
-    let mut damage = Vec::new();
+    let (mut damage, mut skipped_chunks) = (Vec::new(), 0);
     for f in &files {
         let outcome = crate::source::stream(f, options.accept_damage, |m| collector.visit(m))?;
         damage.extend(outcome.damage);
+        skipped_chunks += outcome.skipped_chunks;
     }
-    let extracted = collector.finish()?;
-    let (table, mut report) = tabulate(bag, extracted, options.rate_hz)?;
+    let extracted = collector.finish().map_err(|e| match damage.first() {
+        // All that could be read was skipped as damage: say so, not only what is missing.
+        Some(first) if matches!(e, BagError::MissingTopic { .. } | BagError::Field { .. }) => {
+            data_error(
+            bag,
+            format!(
+                "too little is left after skipping the damage ({} damaged record(s); the first: {first}): {e}",
+                    skipped_chunks.max(1)
+                ),
+            )
+        }
+        _ => e,
+    })?;
+    let (table, mut report) = tabulate(bag, extracted, options)?;
+    check_table(bag, &table)?;
     report.files = files.iter().map(|f| f.display().to_string()).collect();
     report.damage = damage;
+    report.skipped_chunks = skipped_chunks;
     Ok(Imported { table, report })
 }
 
@@ -58,6 +86,7 @@ pub fn import_to_csv(
 ) -> Result<ImportReport, BagError> {
     output::check_destination(out)?;
     let imported = import(bag, profile, options)?;
+    output::check_columns(bag, &imported.table)?;
     output::write_csv(out, &imported.table)?;
     Ok(imported.report)
 }
@@ -78,11 +107,106 @@ fn signal_report(s: &Series) -> SignalReport {
     }
 }
 
+fn data_error(bag: &Path, message: String) -> BagError {
+    BagError::Data {
+        bag: bag.to_path_buf(),
+        message,
+    }
+}
+
+/// The recording's rate (the `q` topic's median) and the output rate must reach
+/// [`MIN_RATE_HZ`], or with `accept_low_rate` they give a warning (returned).
+fn check_rates(
+    bag: &Path,
+    q: &Series,
+    period_ns: i64,
+    options: &ImportOptions,
+) -> Result<Vec<String>, BagError> {
+    let recorded = resample::median_period_ns(&q.stamps).map_or(0.0, |p| 1e9 / p as f64);
+    let output = 1e9 / period_ns as f64;
+    let mut low = Vec::new();
+    if recorded < MIN_RATE_HZ {
+        low.push(format!(
+            "the recording's q topic `{}` has a median rate of {recorded:.3} Hz",
+            q.topic
+        ));
+    }
+    if output < MIN_RATE_HZ && options.rate_hz.is_some() {
+        low.push(format!("--rate {output:.3} Hz"));
+    }
+    if low.is_empty() {
+        return Ok(Vec::new());
+    }
+    let why = format!(
+        "{}, under the {MIN_RATE_HZ} Hz the loop needs (its observers differentiate the angles at the control rate)",
+        low.join(" and ")
+    );
+    if !options.accept_low_rate {
+        return Err(data_error(bag, format!("{why}: record at the robot's rate (or give a higher --rate), or pass --accept-low-rate to import it anyway")));
+    }
+    Ok(vec![format!(
+        "WARNING: {why}; imported because of --accept-low-rate"
+    )])
+}
+
+/// The memory budget, before the resampling allocates: rows x columns <= MAX_TABLE_VALUES.
+fn check_budget(bag: &Path, ex: &Extracted, rows: usize, period_ns: i64) -> Result<(), BagError> {
+    let n = ex.joints.len();
+    let label = ex
+        .series
+        .iter()
+        .find(|s| s.role == "label")
+        .map_or(0, |s| s.columns.len());
+    let columns = 2 + 4 * n + label;
+    let values = rows as u128 * columns as u128;
+    if values <= MAX_TABLE_VALUES {
+        return Ok(());
+    }
+    let span_s = rows as f64 * period_ns as f64 * 1e-9;
+    let max_rate = MAX_TABLE_VALUES as f64 / columns as f64 / span_s;
+    Err(data_error(bag, format!(
+        "the table would have {rows} rows x {columns} columns = {values} values ({:.1} s common span at {:.3} Hz), above the import's memory budget of {MAX_TABLE_VALUES} values (400 MB): give a lower --rate (at most {max_rate:.3} Hz for this span), or if the span is longer than the recording, a stamp far from the others (a clock jump) stretches it: cut the bag before it",
+        span_s,
+        1e9 / period_ns as f64,
+    )))
+}
+
+/// What the table cannot honestly carry: two columns of one name, a non-finite value.
+fn check_table(bag: &Path, t: &Table) -> Result<(), BagError> {
+    let mut names: Vec<&String> = t.joints.iter().collect();
+    names.sort();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(data_error(bag, format!("joint `{}` appears twice in the joint names: the columns would be ambiguous; list the joints once in the profile's `joints`", w[0])));
+    }
+    let blocks = [
+        ("q", &t.q),
+        ("qdot", &t.qdot),
+        ("qddot", &t.qddot),
+        ("tau", &t.tau),
+    ];
+    let label = t.label.iter().map(|(c, v)| ("label", v, c));
+    let joint_blocks = blocks.iter().map(|(p, v)| (*p, *v, &t.joints));
+    for (prefix, values, cols) in joint_blocks.chain(label) {
+        let m = cols.len().max(1);
+        if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+            return Err(data_error(bag, format!(
+                "column {prefix}.{} is {} at row {} (t = {:.6} s) after resampling: values that large overflow (are the recorded values in the right unit?); nothing was written",
+                cols.get(i % m).map_or("?", |c| c.as_str()),
+                values[i],
+                i / m,
+                t.t.get(i / m).copied().unwrap_or(f64::NAN)
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn tabulate(
     bag: &Path,
     ex: Extracted,
-    rate_hz: Option<f64>,
+    options: &ImportOptions,
 ) -> Result<(Table, ImportReport), BagError> {
+    let rate_hz = options.rate_hz;
     let (Some(q), Some(tau)) = (find(&ex.series, "q"), find(&ex.series, "tau")) else {
         return Err(BagError::Data {
             bag: bag.to_path_buf(),
@@ -92,6 +216,10 @@ fn tabulate(
     let qdot = find(&ex.series, "qdot");
     let label = find(&ex.series, "label");
     let period = resample::period_ns(bag, q, rate_hz)?;
+    let mut notes = ex.notes.clone();
+    notes.extend(check_rates(bag, q, period, options)?);
+    let rows = resample::grid_rows(bag, &ex.series, period)?;
+    check_budget(bag, &ex, rows, period)?;
     let grid = resample::grid(bag, &ex.series, period)?;
     let drop = if qdot.is_some() { 1 } else { 2 };
     if grid.len() < drop + 1 {
@@ -123,7 +251,11 @@ fn tabulate(
     };
     let qddot_v = resample::backward_difference(&qdot_v, n, dt);
     let tau_v = resample::interpolate(tau, &grid);
-    let cut = |v: Vec<f64>, m: usize| v[drop * m..].to_vec();
+    // In place: the table is the budgeted memory, not twice it.
+    let cut = |mut v: Vec<f64>, m: usize| {
+        v.drain(..drop * m);
+        v
+    };
     let stamps = grid[drop..].to_vec();
     let t0 = stamps[0];
     let table = Table {
@@ -150,6 +282,8 @@ fn tabulate(
         signals: ex.series.iter().map(signal_report).collect(),
         skips: ex.skips,
         damage: Vec::new(),
+        skipped_chunks: 0,
+        notes,
         joints: ex.joints.clone(),
         rate_hz: 1e9 / period as f64,
         rate_is_median: rate_hz.is_none(),

@@ -13,7 +13,11 @@
 //! recording's files are read in name order), its `metadata.yaml`, or a single `.mcap`
 //! file. Chunks may be uncompressed or zstd-compressed (`ros2 bag record -s mcap
 //! --storage-preset-profile zstd_fast`). A sqlite3 bag (`.db3`) and lz4 chunks are
-//! refused with the conversion command [`CONVERT_COMMAND`].
+//! refused with the conversion command [`CONVERT_COMMAND`]. The files are streamed
+//! record by record by the crate's own bounded reader (`container`): every declared length
+//! is checked against the file and a 256 MiB limit before allocating, a chunk's
+//! decompression ends with its input and must give exactly the declared size. Only
+//! regular files are opened (a FIFO or a device is refused from its file type).
 //!
 //! # Tested here
 //!
@@ -50,8 +54,12 @@
 //! * A message that cannot be used (undecodable payload, a missing joint, wrong array
 //!   length, a non-finite value) is skipped and counted by topic and reason in the
 //!   [`ImportReport`]; a signal left with no message is an error. Damaged MCAP data
-//!   (truncation, a failed CRC) is an error unless [`ImportOptions::accept_damage`], and
-//!   then the loss is reported.
+//!   (truncation, a failed CRC, a declared size that does not hold) is an error naming
+//!   file, chunk and byte offset unless [`ImportOptions::accept_damage`]: then a damaged
+//!   chunk is skipped and counted, and the loss is reported. An absent label topic is a
+//!   note; a recording under [`MIN_RATE_HZ`] is refused unless
+//!   [`ImportOptions::accept_low_rate`]; the table's size is checked against
+//!   [`MAX_TABLE_VALUES`] before the resampling allocates.
 //! * The table is sampled on a fixed grid (default: the median rate of the `q` topic) over
 //!   the span common to all signals, by linear interpolation; a grid point on a sample's
 //!   stamp takes that sample exactly. `qdot`, when the profile has none, is the backward
@@ -64,6 +72,7 @@
 // topic, field and types as text) does not matter.
 #![allow(clippy::result_large_err)]
 
+mod container;
 mod error;
 mod extract;
 mod flat;
@@ -76,8 +85,8 @@ mod resample;
 mod source;
 
 pub use error::{fmt_ns, BagError, CONVERT_COMMAND};
-pub use import::{import, import_to_csv, ImportOptions, Imported};
-pub use output::{check_destination, csv_text, write_csv, STAMP_COLUMN};
+pub use import::{import, import_to_csv, ImportOptions, Imported, MAX_TABLE_VALUES, MIN_RATE_HZ};
+pub use output::{check_columns, check_destination, csv_text, write_csv, STAMP_COLUMN};
 pub use profile::{Profile, SignalSource, FLOAT64_MULTI_ARRAY, JOINT_STATE, WRENCH_STAMPED};
 pub use report::{ImportReport, SignalReport, Skip, TimeBase, TopicCount};
 pub use resample::Table;

@@ -57,10 +57,8 @@ pub fn check_destination(path: &Path) -> Result<(), BagError> {
     }
 }
 
-/// The CSV text: `t, q.J..., qdot.J..., qddot.J..., tau.J..., label.X..., bag_stamp_ns`,
-/// numbers in Rust's shortest round-trip form.
-pub fn csv_text(table: &Table) -> String {
-    let n = table.joints.len();
+/// The CSV's header fields.
+fn header(table: &Table) -> Vec<String> {
     let mut header = vec!["t".to_string()];
     for prefix in ["q", "qdot", "qddot", "tau"] {
         header.extend(table.joints.iter().map(|j| format!("{prefix}.{j}")));
@@ -69,40 +67,95 @@ pub fn csv_text(table: &Table) -> String {
         header.extend(cols.iter().map(|c| format!("label.{c}")));
     }
     header.push(STAMP_COLUMN.to_string());
-    let mut out = header.join(",");
-    out.push('\n');
+    header
+}
+
+/// The names must make an honest CSV header: no comma, quote or line break (they would
+/// split or shift the columns), not empty, no two alike.
+pub fn check_columns(bag: &Path, table: &Table) -> Result<(), BagError> {
+    let bad = |message: String| BagError::Data {
+        bag: bag.to_path_buf(),
+        message,
+    };
+    let label = table.label.iter().flat_map(|(c, _)| c.iter());
+    for name in table.joints.iter().chain(label) {
+        if name.is_empty() || name.contains([',', '"', '\n', '\r']) || name.trim() != name {
+            return Err(bad(format!(
+                "joint or label name {name:?} cannot be a CSV column name (empty, or a comma, quote, line break or outer space): rename it in the profile's `joints`"
+            )));
+        }
+    }
+    let mut h = header(table);
+    h.sort();
+    if let Some(w) = h.windows(2).find(|w| w[0] == w[1]) {
+        return Err(bad(format!(
+            "column `{}` would appear twice in the CSV: list each joint once in the profile's `joints`",
+            w[0]
+        )));
+    }
+    Ok(())
+}
+
+fn write_rows(out: &mut impl Write, table: &Table) -> std::io::Result<()> {
+    let n = table.joints.len();
+    writeln!(out, "{}", header(table).join(","))?;
     for k in 0..table.len() {
-        let mut fields = vec![table.t[k].to_string()];
+        write!(out, "{}", table.t[k])?;
         for x in [&table.q, &table.qdot, &table.qddot, &table.tau] {
-            fields.extend(x[k * n..(k + 1) * n].iter().map(f64::to_string));
+            for v in &x[k * n..(k + 1) * n] {
+                write!(out, ",{v}")?;
+            }
         }
         if let Some((cols, v)) = &table.label {
             let m = cols.len();
-            fields.extend(v[k * m..(k + 1) * m].iter().map(f64::to_string));
+            for v in &v[k * m..(k + 1) * m] {
+                write!(out, ",{v}")?;
+            }
         }
-        fields.push(table.stamps_ns[k].to_string());
-        out.push_str(&fields.join(","));
-        out.push('\n');
+        writeln!(out, ",{}", table.stamps_ns[k])?;
     }
-    out
+    Ok(())
 }
 
-/// Writes the table to `path` (checked again) through a temporary sibling that is flushed
-/// to disk and renamed: `path` holds the old file or the new one, never a part.
+/// The CSV text: `t, q.J..., qdot.J..., qddot.J..., tau.J..., label.X..., bag_stamp_ns`,
+/// numbers in Rust's shortest round-trip form.
+pub fn csv_text(table: &Table) -> String {
+    let mut out = Vec::new();
+    let _ = write_rows(&mut out, table);
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// A name nobody can guess before the run (a planted link there would be refused anyway:
+/// the file is created exclusively).
+fn unpredictable_suffix() -> String {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u128(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos()),
+    );
+    format!("{}-{:016x}", std::process::id(), h.finish())
+}
+
+/// Writes the table to `path` (checked again) through a temporary sibling that is written
+/// row by row, flushed to disk and renamed: `path` holds the old file or the new one,
+/// never a part.
 pub fn write_csv(path: &Path, table: &Table) -> Result<(), BagError> {
     check_destination(path)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let text = csv_text(table);
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", unpredictable_suffix()));
     let result = (|| {
-        let mut f = std::fs::OpenOptions::new()
+        let f = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&tmp)?;
-        f.write_all(text.as_bytes())?;
+        let mut w = std::io::BufWriter::new(f);
+        write_rows(&mut w, table)?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();

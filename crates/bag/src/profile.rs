@@ -103,6 +103,18 @@ impl Profile {
                 ),
             });
         }
+        match std::fs::metadata(path) {
+            Ok(m) if !m.is_file() => {
+                return Err(BagError::Profile {
+                    profile: arg.to_string(),
+                    message: format!(
+                        "is {}, not a TOML file",
+                        crate::source::special_kind(&m.file_type())
+                    ),
+                })
+            }
+            _ => {}
+        }
         let text = std::fs::read_to_string(path).map_err(|e| BagError::Profile {
             profile: arg.to_string(),
             message: format!("cannot read it: {e}"),

@@ -96,8 +96,12 @@ pub struct ImportReport {
     pub signals: Vec<SignalReport>,
     /// Skipped messages.
     pub skips: Vec<Skip>,
-    /// Damage accepted with `accept_damage` (the data after it is lost).
+    /// Damage accepted with `accept_damage`: skipped chunks, where reading stopped.
     pub damage: Vec<String>,
+    /// Damaged chunks (or other records) skipped with `accept_damage`.
+    pub skipped_chunks: usize,
+    /// Notes and warnings: an absent optional label topic, a low rate accepted.
+    pub notes: Vec<String>,
     /// Joint names.
     pub joints: Vec<String>,
     /// Output rate (Hz) and whether it was the joint topic's median rate.
@@ -157,6 +161,12 @@ impl fmt::Display for ImportReport {
         }
         for d in &self.damage {
             writeln!(f, "DAMAGED (accepted): {d}")?;
+        }
+        if !self.damage.is_empty() {
+            writeln!(f, "damaged chunks skipped: {}", self.skipped_chunks)?;
+        }
+        for n in &self.notes {
+            writeln!(f, "note: {n}")?;
         }
         for (topic, start, len) in &self.gaps {
             writeln!(f, "gap: {topic}: no message for {len:.3} s from t = {start:.3} s (interpolated across)")?;

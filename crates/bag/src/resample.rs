@@ -119,9 +119,9 @@ pub fn backward_difference(x: &[f64], n: usize, dt: f64) -> Vec<f64> {
     out
 }
 
-/// The grid: the first series' (`q`'s) first stamp plus multiples of `period`, inside the
-/// span common to all series (so at the `q` topic's own rate the grid is its stamps).
-pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagError> {
+/// The first grid point and the number of rows, in i128 (stamps from damaged data may be
+/// anywhere in the i64 range); `None` when no grid point falls in the common span.
+fn grid_span(bag: &Path, series: &[Series], period: i64) -> Result<Option<(i128, i128)>, BagError> {
     if let Some(s) = series.iter().find(|s| s.stamps.is_empty()) {
         return Err(BagError::Data {
             bag: bag.to_path_buf(),
@@ -158,19 +158,33 @@ pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagE
         });
     }
     // The first grid point at or after `start`.
-    // In i128: stamps from damaged data may be anywhere in the i64 range.
     let (anchor, start, end, period) = (anchor as i128, start as i128, end as i128, period as i128);
     let first = anchor + (start - anchor + period - 1) / period * period;
     if first > end {
-        return Ok(Vec::new());
+        return Ok(None);
     }
-    let rows = (end - first) / period + 1;
-    if rows > 100_000_000 {
+    Ok(Some((first, (end - first) / period + 1)))
+}
+
+/// The number of grid rows, computed without building the grid (for the memory budget).
+pub fn grid_rows(bag: &Path, series: &[Series], period: i64) -> Result<usize, BagError> {
+    Ok(grid_span(bag, series, period)?
+        .map_or(0, |(_, rows)| usize::try_from(rows).unwrap_or(usize::MAX)))
+}
+
+/// The grid: the first series' (`q`'s) first stamp plus multiples of `period`, inside the
+/// span common to all series (so at the `q` topic's own rate the grid is its stamps).
+pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagError> {
+    let Some((first, rows)) = grid_span(bag, series, period)? else {
+        return Ok(Vec::new());
+    };
+    if rows > crate::import::MAX_TABLE_VALUES as i128 {
         return Err(BagError::Data {
             bag: bag.to_path_buf(),
             message: format!("{rows} rows at this rate: choose a lower --rate"),
         });
     }
+    let period = period as i128;
     Ok((0..rows).map(|k| (first + k * period) as i64).collect())
 }
 

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::{BagError, CONVERT_COMMAND};
+use crate::error::BagError;
 
 /// The MCAP file's first bytes.
 const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
@@ -16,8 +16,47 @@ fn io(path: &Path, e: impl std::fmt::Display) -> BagError {
     }
 }
 
+/// Refuses anything but a regular file (a FIFO would block the reader for ever, a device
+/// read without end) from its metadata, before the file is opened.
+fn regular_file(path: &Path) -> Result<(), BagError> {
+    let meta = std::fs::metadata(path).map_err(|e| io(path, e))?;
+    if meta.is_file() {
+        return Ok(());
+    }
+    Err(BagError::NotABag {
+        path: path.to_path_buf(),
+        reason: format!(
+            "{}; a bag is a folder of .mcap files or one regular .mcap file",
+            special_kind(&meta.file_type())
+        ),
+    })
+}
+
+/// What a file that is not a regular file is, in words.
+pub fn special_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
 fn head(path: &Path) -> Result<Vec<u8>, BagError> {
     use std::io::Read;
+    regular_file(path)?;
     let mut buf = Vec::with_capacity(16);
     std::fs::File::open(path)
         .and_then(|f| f.take(16).read_to_end(&mut buf))
@@ -109,82 +148,29 @@ pub struct RawMessage<'a> {
     pub data: &'a [u8],
 }
 
-/// What happened while streaming a file: messages read, and the damage that stopped the
-/// reading early when damage is accepted.
+/// What happened while streaming a file: messages read, and with accepted damage what
+/// was lost.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StreamOutcome {
     /// Messages handed to the visitor.
     pub messages: usize,
-    /// The MCAP reader's error that ended the file early (accepted damage).
-    pub damage: Option<String>,
+    /// The damage accepted: skipped records and where reading stopped, one line each.
+    pub damage: Vec<String>,
+    /// Damaged chunks (or other records) skipped.
+    pub skipped_chunks: usize,
 }
 
-fn fmt_time(ns: Option<u64>) -> String {
-    ns.map_or("none".to_string(), |t| format!("{:.9} s", t as f64 * 1e-9))
-}
-
-/// Streams the messages of one MCAP file to `visit`. Damaged data (truncation, a failed
-/// chunk CRC or decompression) is an error naming the file, the messages read before and
-/// the last log time; with `accept_damage` the messages before it are kept and the damage
-/// is returned in the outcome to be reported.
+/// Streams the messages of one MCAP file to `visit`, record by record with bounded
+/// memory (`crate::container`). Damaged data (truncation, a failed chunk CRC or
+/// decompression, a declared size that does not hold) is an error naming the file, the
+/// byte offset, the chunk, the messages read before and the last log time; with
+/// `accept_damage` a damaged chunk is skipped and counted, a truncated file keeps the
+/// messages before the end, and the loss is returned in the outcome to be reported.
 pub fn stream(
     file: &Path,
     accept_damage: bool,
     mut visit: impl FnMut(&RawMessage) -> Result<(), BagError>,
 ) -> Result<StreamOutcome, BagError> {
-    let bytes = std::fs::read(file).map_err(|e| io(file, e))?;
-    let mut outcome = StreamOutcome::default();
-    let mut last_log = None;
-    let damaged = |message: String, read: usize, last: Option<u64>| {
-        BagError::Damaged {
-        path: file.to_path_buf(),
-        messages_read: read,
-        last_log_time: fmt_time(last),
-        message,
-        hint: "a recorder that was killed leaves a truncated file: pass --accept-damaged to import the messages before the damage (the loss is reported)".into(),
-    }
-    };
-    let mut messages = match mcap::MessageStream::new(&bytes) {
-        Ok(s) => s,
-        Err(e) => return Err(damaged(e.to_string(), 0, None)),
-    };
-    loop {
-        // The MCAP reader parses untrusted bytes: a panic in it is reported as damage.
-        let next = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| messages.next()))
-            .unwrap_or_else(|_| Some(Err(mcap::McapError::BadIndex)));
-        let message = match next {
-            None => break,
-            Some(Ok(m)) => m,
-            Some(Err(mcap::McapError::UnsupportedCompression(c))) => {
-                return Err(BagError::Unsupported {
-                    path: file.to_path_buf(),
-                    message: format!(
-                        "chunks compressed with `{c}`; only uncompressed and zstd chunks are read: convert with `{CONVERT_COMMAND}` (uncompressed), or record with zstd"
-                    ),
-                })
-            }
-            Some(Err(e)) if accept_damage => {
-                outcome.damage = Some(format!(
-                    "{}: reading stopped after {} messages (last log time {}): {e}",
-                    file.display(),
-                    outcome.messages,
-                    fmt_time(last_log)
-                ));
-                break;
-            }
-            Some(Err(e)) => return Err(damaged(e.to_string(), outcome.messages, last_log)),
-        };
-        let schema = message.channel.schema.as_deref();
-        visit(&RawMessage {
-            topic: &message.channel.topic,
-            type_name: schema.map_or("", |s| s.name.as_str()),
-            schema: schema.map(|s| (s.encoding.as_str(), &*s.data)),
-            encoding: &message.channel.message_encoding,
-            log_time: message.log_time,
-            data: &message.data,
-        })?;
-        outcome.messages += 1;
-        last_log = Some(message.log_time);
-    }
-    Ok(outcome)
+    regular_file(file)?;
+    crate::container::read(file, accept_damage, &mut visit)
 }

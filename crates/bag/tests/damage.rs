@@ -14,6 +14,7 @@ fn options(accept_damage: bool) -> ImportOptions {
     ImportOptions {
         rate_hz: None,
         accept_damage,
+        ..Default::default()
     }
 }
 
@@ -282,6 +283,7 @@ fn a_bad_rate_and_too_short_a_bag_are_errors() {
     let o = ImportOptions {
         rate_hz: Some(-5.0),
         accept_damage: false,
+        ..Default::default()
     };
     let e = import(&bag, &js_profile(true), &o).unwrap_err().to_string();
     assert!(e.contains("rate -5 Hz"), "{e}");
@@ -333,6 +335,7 @@ fn extreme_stamps_and_log_times_give_errors_or_tables_not_overflows() {
                 let o = ImportOptions {
                     rate_hz: rate,
                     accept_damage: false,
+                    ..Default::default()
                 };
                 let _ = import(&path, &js_profile(qdot), &o);
             }

@@ -16,6 +16,7 @@ fn run(bag: &str, profile: &Profile, rate: Option<f64>) -> Imported {
     let options = ImportOptions {
         rate_hz: rate,
         accept_damage: false,
+        ..Default::default()
     };
     import(&data(bag), profile, &options).unwrap_or_else(|e| panic!("{bag}: {e}"))
 }

@@ -4,7 +4,7 @@
 //! the stretch as a time series from its first sample. The table the identification
 //! experiment quotes (docs/experiments.md, "Identification on a real Baxter").
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use admittance_control::{
@@ -15,7 +15,10 @@ use admittance_learning::broad::BroadModel;
 use clap::Args;
 
 use crate::identify_cmd::Conditioned;
-use crate::train_cmd::{non_negative_hz, positive_number};
+use crate::train_cmd::{
+    check_network, input_filter_hz, network_filter_hz, non_negative_hz, positive_number,
+    IdentificationFile, Learned,
+};
 use crate::CliError;
 
 /// `--from`: a time in seconds, finite and >= 0.
@@ -39,18 +42,24 @@ pub struct EvaluateArgs {
     /// An identification file (`admittance identify`) of this arm.
     #[arg(long)]
     identification: Option<PathBuf>,
-    /// A network trained on the torque (`admittance train`): the paper's learned model.
+    /// A network trained on the torque (`admittance train`): the paper's learned model. A
+    /// residual network (`train --nominal`) given here is recognised from its file.
     #[arg(long)]
     network: Vec<PathBuf>,
     /// A network trained on the identification's residual (`admittance train --nominal`).
     #[arg(long)]
     residual: Option<PathBuf>,
-    /// Input conditioning (Hz), as the files were trained with; 0: columns as recorded.
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
-    input_filter_hz: f64,
+    /// Input conditioning (Hz); 0: columns as recorded. Default: the one the files record
+    /// (another value is an error), else 0.
+    #[arg(long, value_parser = non_negative_hz, allow_negative_numbers = true)]
+    input_filter_hz: Option<f64>,
     /// Momentum observer gain K_O (1/s).
     #[arg(long, default_value_t = 50.0, value_parser = positive_number)]
     gain: f64,
+    /// A contact floor (`admittance calibrate-contact`): also count the false alarms it
+    /// raises on the evaluated rows.
+    #[arg(long, requires = "identification")]
+    contact_floor: Option<PathBuf>,
 }
 
 /// Per-joint squared-error sums of one estimator.
@@ -78,6 +87,11 @@ impl Score {
 
 fn load_network(path: &PathBuf, n: usize) -> Result<BroadModel, CliError> {
     let net = BroadModel::load(path).map_err(|e| CliError::input(e.to_string()))?;
+    check_sizes(path, &net, n)?;
+    Ok(net)
+}
+
+fn check_sizes(path: &Path, net: &BroadModel, n: usize) -> Result<(), CliError> {
     if net.d_in() != 3 * n || net.d_out() != n {
         return Err(CliError::input(format!(
             "{}: maps {} inputs to {} outputs; this arm needs [q, qdot, qddot] ({}) to {n}",
@@ -87,7 +101,89 @@ fn load_network(path: &PathBuf, n: usize) -> Result<BroadModel, CliError> {
             3 * n
         )));
     }
-    Ok(net)
+    Ok(())
+}
+
+/// The files' networks and residual, each checked against the arm and the identification
+/// (a residual given as `--network` is recognised and moved to the residual).
+type Networks = (Vec<(String, BroadModel)>, Option<(PathBuf, BroadModel)>);
+
+fn load_networks(
+    args: &EvaluateArgs,
+    arm: &admittance_dynamics::Model,
+    ident: Option<&IdentificationFile>,
+) -> Result<Networks, CliError> {
+    let n = arm.nq();
+    let mut networks = Vec::new();
+    let mut residual = None;
+    for p in &args.network {
+        let net = load_network(p, n)?;
+        match check_network(p, &net, arm, ident)? {
+            Learned::Torque | Learned::Unrecorded => networks.push((p.display().to_string(), net)),
+            Learned::IdentifiedResidual => {
+                if let Some((q, _)) = residual.replace((p.clone(), net)) {
+                    return Err(CliError::usage(format!(
+                        "{} and {}: two residual networks; evaluate one at a time",
+                        q.display(),
+                        p.display()
+                    )));
+                }
+                eprintln!(
+                    "admittance: {} learned the residual of {}: scored as the identification + residual (as --residual)",
+                    p.display(),
+                    ident.map_or(String::new(), |i| i.path.display().to_string())
+                );
+            }
+        }
+    }
+    if let Some(p) = &args.residual {
+        if residual.is_some() {
+            return Err(CliError::usage(format!(
+                "--residual {} and a residual network among --network: evaluate one at a time",
+                p.display()
+            )));
+        }
+        let net = load_network(p, n)?;
+        if ident.is_none() {
+            return Err(CliError::usage(
+                "--residual needs --identification (the model whose residual it learned)",
+            ));
+        }
+        if check_network(p, &net, arm, ident)? == Learned::Torque {
+            return Err(CliError::usage(format!(
+                "--residual {}: it learned the free-motion torque, not a residual: give it with --network",
+                p.display()
+            )));
+        }
+        residual = Some((p.clone(), net));
+    }
+    Ok((networks, residual))
+}
+
+/// The conditioning the files record (the flag must agree), and the conditioned rows.
+fn conditioning(
+    args: &EvaluateArgs,
+    ident: Option<&IdentificationFile>,
+    (networks, residual): &Networks,
+) -> Result<f64, CliError> {
+    let mut recorded: Vec<(String, f64)> = ident
+        .iter()
+        .map(|i| (i.path.display().to_string(), i.input_filter_hz))
+        .collect();
+    let nets = networks
+        .iter()
+        .map(|(name, net)| (name.clone(), net))
+        .chain(
+            residual
+                .iter()
+                .map(|(p, net)| (p.display().to_string(), net)),
+        );
+    for (name, net) in nets {
+        if let Some(hz) = network_filter_hz(net) {
+            recorded.push((name, hz));
+        }
+    }
+    input_filter_hz(args.input_filter_hz, &recorded)
 }
 
 pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
@@ -104,26 +200,21 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         )));
     }
     let n = arm.nq();
-    let rows = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
-    let ident = match &args.identification {
-        Some(p) => Some(Identification::load(p, &arm).map_err(|e| CliError::input(e.to_string()))?),
+    let ident_file = match &args.identification {
+        Some(p) => Some(IdentificationFile::load(p, &arm)?),
         None => None,
     };
-    let networks: Vec<(String, BroadModel)> = args
-        .network
-        .iter()
-        .map(|p| Ok((p.display().to_string(), load_network(p, n)?)))
-        .collect::<Result<_, CliError>>()?;
-    let residual = args
-        .residual
-        .as_ref()
-        .map(|p| load_network(p, n))
-        .transpose()?;
-    if residual.is_some() && ident.is_none() {
-        return Err(CliError::usage(
-            "--residual needs --identification (the model whose residual it learned)",
-        ));
-    }
+    let loaded = load_networks(args, &arm, ident_file.as_ref())?;
+    let filter = conditioning(args, ident_file.as_ref(), &loaded)?;
+    let rows = Conditioned::new(&args.data, &data, filter)?;
+    // The identification's rows: the torque paired with the motion as it was fitted.
+    let paired = match &ident_file {
+        Some(i) => Some(i.paired(&args.data, &data, filter)?),
+        None => None,
+    };
+    let (networks, residual) = loaded;
+    let residual = residual.map(|(_, net)| net);
+    let ident: Option<Identification> = ident_file.map(|i| i.ident);
     let config = MomentumObserverConfig {
         gain: admittance_control::JointValues::Uniform(args.gain),
     };
@@ -184,6 +275,7 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             &rows.qddot[r.clone()],
             &rows.tau[r.clone()],
         );
+        let tau_id = paired.as_ref().map_or(tau, |p| &p.tau[r.clone()]);
         // nMSE is relative to the recorded torque's variance (not the conditioned one).
         for i in 0..n {
             let raw = data.tau[k * n + i];
@@ -205,12 +297,12 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         if let (Some(id), Some(d)) = (&ident, data_ident.as_mut()) {
             let rigid =
                 rnea(&id.model, d, q, qd, qdd).map_err(|e| CliError::input(e.to_string()))?;
-            diff(tau, rigid.as_slice(), &mut out);
+            diff(tau_id, rigid.as_slice(), &mut out);
             statics[s].add(&out);
             s += 1;
             id.predict(d, q, qd, qdd, &mut est)
                 .map_err(|e| CliError::input(e.to_string()))?;
-            diff(tau, &est, &mut out);
+            diff(tau_id, &est, &mut out);
             statics[s].add(&out);
             s += 1;
             if let Some(r) = &residual {
@@ -223,7 +315,7 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
                 r.predict_into(&x, &mut est, &mut ws)
                     .map_err(|e| CliError::input(e.to_string()))?;
                 for i in 0..n {
-                    out[i] = tau[i] - full[i] - est[i];
+                    out[i] = tau_id[i] - full[i] - est[i];
                 }
                 statics[s].add(&out);
                 s += 1;
@@ -248,8 +340,14 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             qddot: qdd,
             tau_commanded: tau,
         };
+        // The observers on the identification take its pairing (the first is the URDF's).
+        let input_id = ObserverInput {
+            tau_commanded: tau_id,
+            ..input
+        };
         for (o, ((_, obs), score)) in observers.iter_mut().zip(dynamic.iter_mut()).enumerate() {
-            if !matches!(obs.update(&input, dt, &mut est), StepStatus::Ok) {
+            let input = if o == 0 { &input } else { &input_id };
+            if !matches!(obs.update(input, dt, &mut est), StepStatus::Ok) {
                 faults[o] += 1;
             }
             score.add(&est);
@@ -260,8 +358,10 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         .map(|i| (tau_sq[i] / count - (tau_sum[i] / count).powi(2)).max(1e-12))
         .collect();
     let mut text = format!(
-        "{} rows of {} from t = {:.2} s ({:.1} s), no external force: every estimate is a false torque\n{:<34} {:>8} {:>7}  per joint rms (N m)\n",
-        data.len() - first, args.data.display(), data.t[first], data.t[data.len() - 1] - data.t[first], "estimator", "rms N m", "nMSE"
+        "{} rows of {} from t = {:.2} s ({:.1} s), no external force: every estimate is a false torque\ninput filter: {}\n{:<34} {:>8} {:>7}  per joint rms (N m)\n",
+        data.len() - first, args.data.display(), data.t[first], data.t[data.len() - 1] - data.t[first],
+        if filter > 0.0 { format!("{filter} Hz") } else { "none (the columns as recorded)".into() },
+        "estimator", "rms N m", "nMSE"
     );
     let mut bad = false;
     for (k, score) in statics.iter().chain(dynamic.iter()).enumerate() {
@@ -302,6 +402,12 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             outside,
             data.len() - first
         );
+    }
+    if let Some(floor) = &args.contact_floor {
+        let (id, from) = (ident.as_ref(), args.from);
+        text += &crate::evaluate_contact::false_alarm_table(
+            floor, &args.data, &data, from, id, filter,
+        )?;
     }
     crate::write_stdout(&text);
     if bad {

@@ -5,7 +5,6 @@
 //! arm (the URDF, by RNEA) needs for the motion: a feed-forward reference for the
 //! controller that plays it; a recording on the real arm replaces them.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use admittance_dynamics::{excitation, rnea, Data, Excitation, ExcitationSettings, Model};
@@ -47,6 +46,25 @@ pub struct ExciteArgs {
     /// Condition-number evaluations of the local search.
     #[arg(long, default_value_t = 2000)]
     iterations: usize,
+    /// Centre of the envelope: one position per joint, comma-separated (rad or m; default:
+    /// the middle of each joint's limits). Give the pose the robot is at, away from obstacles.
+    #[arg(long, value_name = "Q1,Q2,...", allow_hyphen_values = true)]
+    pose: Option<String>,
+    /// Half-width of each joint's range around the pose (rad or m): one number for every
+    /// joint or one per joint, comma-separated; `full`: the URDF's whole range.
+    #[arg(
+        long,
+        value_name = "R or R1,R2,...",
+        default_value = "0.5",
+        allow_hyphen_values = true
+    )]
+    range: String,
+    /// Fraction (0 to 1] of each joint's URDF velocity limit the motion may reach.
+    #[arg(long, default_value_t = admittance_dynamics::DEFAULT_LIMIT_FRACTION, allow_negative_numbers = true)]
+    velocity_fraction: f64,
+    /// Fraction (0 to 1] of --acceleration-limit the motion may reach.
+    #[arg(long, default_value_t = admittance_dynamics::DEFAULT_LIMIT_FRACTION, allow_negative_numbers = true)]
+    acceleration_fraction: f64,
     /// CSV file to write: a new name or a file `excite` wrote.
     #[arg(long)]
     out: PathBuf,
@@ -66,8 +84,42 @@ impl ExciteArgs {
             position_margin: self.position_margin,
             seed: self.seed,
             iterations: self.iterations,
+            ..Default::default()
         }
     }
+
+    /// The settings with the envelope for `arm`: `--pose`, `--range` and the fractions.
+    fn settings_for(&self, arm: &Model) -> Result<ExcitationSettings, CliError> {
+        let n = arm.nq();
+        let pose = match &self.pose {
+            Some(text) => {
+                crate::dynamics_cmd::parse_list("pose", text, n, "one position per joint")?
+            }
+            None => Vec::new(),
+        };
+        Ok(ExcitationSettings {
+            pose,
+            range: parse_range(&self.range, n)?,
+            velocity_fraction: self.velocity_fraction,
+            acceleration_fraction: self.acceleration_fraction,
+            ..self.settings()
+        })
+    }
+}
+
+/// `--range`: `full`, one half-width, or one per joint.
+fn parse_range(text: &str, n: usize) -> Result<Vec<f64>, CliError> {
+    if text.trim() == "full" {
+        return Ok(vec![f64::INFINITY]);
+    }
+    let count = text.split(',').count();
+    let expected = if count == 1 { 1 } else { n };
+    crate::dynamics_cmd::parse_list(
+        "range",
+        text,
+        expected,
+        "one half-width, one per joint, or `full`",
+    )
 }
 
 /// A setting's error with the flag's name instead of the setting's.
@@ -80,6 +132,10 @@ fn flag_error(e: admittance_dynamics::DynamicsError) -> CliError {
         ("rate_hz", "--rate"),
         ("acceleration_limit", "--acceleration-limit"),
         ("position_margin", "--position-margin"),
+        ("pose", "--pose"),
+        ("range", "--range"),
+        ("velocity_fraction", "--velocity-fraction"),
+        ("acceleration_fraction", "--acceleration-fraction"),
     ] {
         text = text.replace(&format!("excitation setting {key}:"), &format!("{flag}:"));
     }
@@ -88,6 +144,13 @@ fn flag_error(e: admittance_dynamics::DynamicsError) -> CliError {
 
 /// `--out` must be a new name or a file this command wrote.
 fn check_out(path: &Path) -> Result<(), CliError> {
+    // Checked before any work; the write refuses it again (`admittance_files`).
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        return Err(CliError::usage(format!(
+            "--out {}: is a symbolic link; the file is written only to a new name or over a regular file (remove the link or give another name)",
+            path.display()
+        )));
+    }
     if path.is_dir() {
         return Err(CliError::usage(format!(
             "--out {}: is a folder; give a file name",
@@ -105,11 +168,13 @@ fn check_out(path: &Path) -> Result<(), CliError> {
 
 fn is_ours(path: &Path) -> bool {
     use std::io::BufRead;
-    let Ok(file) = std::fs::File::open(path) else {
+    // Only a regular file is opened (a FIFO would block): its size does not matter here.
+    let Ok(file) = admittance_files::open_regular(path, u64::MAX) else {
         return false;
     };
     let mut header = String::new();
-    let read = std::io::BufReader::new(file).read_line(&mut header).is_ok();
+    let head = std::io::Read::take(file, 1 << 20);
+    let read = std::io::BufReader::new(head).read_line(&mut header).is_ok();
     read && header.starts_with("t,q.") && header.trim_end().ends_with(&format!(",{MARK_COLUMN}"))
 }
 
@@ -118,6 +183,8 @@ pub fn excite(args: &ExciteArgs) -> Result<(), CliError> {
     let settings = args.settings();
     settings.validate().map_err(flag_error)?;
     let arm = crate::dynamics_cmd::load(&args.chain)?;
+    let settings = args.settings_for(&arm)?;
+    settings.validate_for(&arm).map_err(flag_error)?;
     let started = std::time::Instant::now();
     let e = excitation(&arm, &settings)
         .map_err(|e| CliError::input(format!("excitation of this arm: {e}")))?;
@@ -127,8 +194,8 @@ pub fn excite(args: &ExciteArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The free-motion layout plus the mark column, written to a temporary file beside `out`
-/// and renamed over it.
+/// The free-motion layout plus the mark column, written atomically and exclusively
+/// (`admittance_files::write_atomic`: never through a link planted beside `out` or at it).
 fn write_csv(out: &Path, arm: &Model, e: &Excitation, seed: u64) -> Result<(), CliError> {
     let n = arm.nq();
     let names: Vec<&str> = arm.joint_names().collect();
@@ -162,22 +229,18 @@ fn write_csv(out: &Path, arm: &Model, e: &Excitation, seed: u64) -> Result<(), C
         }
         text += &format!(",{seed}\n");
     }
-    let file_name = out
-        .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let temp = out.with_file_name(format!(".{file_name}.tmp-{}", std::process::id()));
-    let failed = |err: std::io::Error| CliError {
+    admittance_files::write_atomic(out, text.as_bytes()).map_err(|err| CliError {
         code: 1,
         message: format!("--out {}: {err}", out.display()),
-    };
-    let written = std::fs::File::create(&temp)
-        .and_then(|mut f| f.write_all(text.as_bytes()).and_then(|_| f.sync_all()));
-    if let Err(err) = written.and_then(|_| std::fs::rename(&temp, out)) {
-        let _ = std::fs::remove_file(&temp);
-        return Err(failed(err));
+    })
+}
+
+fn range_text(range: &[f64]) -> String {
+    match range {
+        [r] if r.is_infinite() => "the whole range".into(),
+        [r] => format!("+-{r}"),
+        many => format!("+-{many:?}"),
     }
-    Ok(())
 }
 
 /// The console summary: conditioning and, per joint, how much of each limit is used.
@@ -191,7 +254,8 @@ fn report(
     let mut text = format!(
         "excitation of {} joints: {} s in {} periods of {} s, {} harmonics, {} samples at {} Hz (optimised in {seconds:.1} s)\n\
          condition number of the base inertial regressor ({} base parameters): {:.2} (first random start: {:.2})\n\
-         limits used (1 = at the limit; position: max |q - middle| / half the range, margin {}):\n  {:<20} {:>9} {:>9} {:>9}\n",
+         envelope: {} around {}, {} % of the velocity limits, {} % of {} rad/s^2, limits less a margin of {}\n\
+         envelope used (1 = at its edge; position: max |q - centre| / half-width):\n  {:<20} {:>9} {:>9} {:>9}\n",
         arm.nq(),
         settings.duration,
         (settings.duration / settings.period).round(),
@@ -202,6 +266,11 @@ fn report(
         e.base_parameters,
         e.condition_number,
         e.initial_condition_number,
+        range_text(&settings.range),
+        if settings.pose.is_empty() { "the middle of the limits".to_string() } else { format!("{:?}", settings.pose) },
+        100.0 * settings.velocity_fraction,
+        100.0 * settings.acceleration_fraction,
+        settings.acceleration_limit,
         settings.position_margin,
         "joint",
         "position",
@@ -219,6 +288,11 @@ fn report(
             u.velocity, u.acceleration
         );
     }
+    let start: Vec<String> = e.q[..arm.nq()].iter().map(|q| format!("{q:.4}")).collect();
+    text += &format!(
+        "starts and ends at rest at q = [{}]: bring the arm there slowly first (docs/your_robot.md)\n",
+        start.join(", ")
+    );
     text += &format!("tau: the torque the nominal arm needs (RNEA of the URDF), a feed-forward reference\nwrote {}\n", out.display());
     if settings.duration > settings.period * (1.0 + 1e-9) {
         // Blocked cross-validation over a periodic recording holds out periods the fit has

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use admittance_dynamics::{identify, Identification, IdentificationSettings, Model, Samples};
+use admittance_dynamics::{Identification, IdentificationSettings, Model, Samples};
 use admittance_scenario::FreeMotionData;
 use clap::Args;
 use serde_json::json;
@@ -14,10 +14,13 @@ use serde_json::json;
 use crate::train_cmd::{non_negative_hz, positive_number};
 use crate::CliError;
 
+mod payload;
+
 #[derive(Args)]
 pub struct IdentifyArgs {
-    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; docs/outputs.md).
-    #[arg(long)]
+    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; docs/outputs.md). Required
+    /// unless --payload.
+    #[arg(long, default_value = "", hide_default_value = true, value_parser = payload::any_path)]
     data: PathBuf,
     #[command(flatten)]
     chain: crate::dynamics_cmd::ChainArgs,
@@ -29,9 +32,11 @@ pub struct IdentifyArgs {
     #[arg(long, value_parser = positive_number)]
     until: Option<f64>,
     /// Low-pass (Hz) on q and tau before differentiating, as the observers condition their
-    /// inputs at run time (`input_filter_hz`); 0: the columns as recorded.
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
-    input_filter_hz: f64,
+    /// inputs at run time (`input_filter_hz`); 0: the columns as recorded. Default: chosen on
+    /// held-out motion among 4, 6 and 10 Hz and the columns as recorded (the identification
+    /// file records it, and every consumer conditions its inputs the same way).
+    #[arg(long, value_parser = non_negative_hz, allow_negative_numbers = true)]
+    input_filter_hz: Option<f64>,
     /// Fit the rigid-body parameters only (no rotor inertia, friction, offset or springs).
     #[arg(long)]
     no_friction: bool,
@@ -47,6 +52,17 @@ pub struct IdentifyArgs {
     /// Identification file to write (JSON): a new name or an identification file.
     #[arg(long)]
     out: PathBuf,
+    /// Free-motion data with a tool or payload attached at the tip (CSV as --data; 20 s
+    /// is enough): fits the payload on top of --identification and writes the
+    /// identification carrying it to --out.
+    #[arg(long, value_name = "DATA", requires = "identification", conflicts_with_all = ["validation"])]
+    payload: Option<PathBuf>,
+    /// With --payload: the identification of the arm without the payload.
+    #[arg(long, value_name = "FILE", requires = "payload")]
+    identification: Option<PathBuf>,
+    /// No progress output on stderr.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// The data's rows as identification samples, conditioned as at run time.
@@ -115,6 +131,13 @@ pub fn rows_until(
 
 /// `--out` must be a new name or an identification file.
 fn check_out(path: &Path) -> Result<(), CliError> {
+    // Checked before any work; the write refuses it again (`admittance_files`).
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        return Err(CliError::usage(format!(
+            "--out {}: is a symbolic link; the file is written only to a new name or over a regular file (remove the link or give another name)",
+            path.display()
+        )));
+    }
     if path.is_dir() {
         return Err(CliError::usage(format!(
             "--out {}: is a folder; give a file name",
@@ -131,11 +154,19 @@ fn check_out(path: &Path) -> Result<(), CliError> {
 }
 
 fn is_identification(path: &Path) -> bool {
-    std::fs::read_to_string(path)
+    admittance_files::read_regular_text(path, admittance_files::TEXT_LIMIT)
         .is_ok_and(|t| t.contains("\"format\": \"admittance-identification\""))
 }
 
 pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
+    if let Some(tool) = &args.payload {
+        return payload::payload_cmd(args, tool);
+    }
+    if args.data.as_os_str().is_empty() {
+        return Err(CliError::usage(
+            "--data is required (or --payload DATA --identification FILE)",
+        ));
+    }
     check_out(&args.out)?;
     if !(2..=50).contains(&args.folds) {
         return Err(CliError::usage(format!(
@@ -147,17 +178,12 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     let joints: Vec<String> = arm.joint_names().map(String::from).collect();
     let data = crate::train_cmd::load_data(&args.data, Some(&joints))?;
     let rows = rows_until(&args.data, &data, args.until)?;
-    let train = Conditioned::new(&args.data, &data, args.input_filter_hz)?;
     let repeats_every_s = match args.validation {
         None => crate::train_cmd::warn_if_repeating(&args.data, &data, rows, args.folds),
         Some(_) => None,
     };
     let validation = match &args.validation {
-        Some(p) => Some(Conditioned::new(
-            p,
-            &crate::train_cmd::load_data(p, Some(&joints))?,
-            args.input_filter_hz,
-        )?),
+        Some(p) => Some(crate::train_cmd::load_data(p, Some(&joints))?),
         None => None,
     };
     let settings = IdentificationSettings {
@@ -167,15 +193,21 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         folds: args.folds,
         ..Default::default()
     };
-    let samples = train.samples().slice(0, rows);
     let started = std::time::Instant::now();
-    let ident = identify(
+    let spinner = crate::progress::Spinner::start(
+        crate::progress::wanted(args.quiet),
+        format!("identifying {} joints from {rows} samples", arm.nq()),
+    );
+    let (ident, tried) = admittance_scenario::identify_recording(
         &arm,
-        &samples,
-        validation.as_ref().map(|v| v.samples()).as_ref(),
+        &data,
+        rows,
+        validation.as_ref(),
         &settings,
+        args.input_filter_hz,
     )
     .map_err(|e| CliError::input(format!("{}: {e}", args.data.display())))?;
+    drop(spinner);
     let mut provenance = BTreeMap::new();
     provenance.insert("data".into(), json!(args.data.display().to_string()));
     provenance.insert("rows".into(), json!(rows));
@@ -184,7 +216,14 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         "validation".into(),
         json!(args.validation.as_ref().map(|p| p.display().to_string())),
     );
-    provenance.insert("input_filter_hz".into(), json!(args.input_filter_hz));
+    provenance.insert("input_filter_hz".into(), json!(ident.summary.input_filter_hz));
+    provenance.insert(
+        "input_filters_tried".into(),
+        json!(tried
+            .iter()
+            .map(|t| json!({"input_filter_hz": t.input_filter_hz, "expected_false_torque_rms": t.expected_false_torque_rms}))
+            .collect::<Vec<_>>()),
+    );
     if let Some(period) = repeats_every_s {
         provenance.insert("data_repeats_every_s".into(), json!(period));
     }
@@ -194,13 +233,25 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
             code: 1,
             message: e.to_string(),
         })?;
-    crate::write_stdout(&report(
-        &arm,
-        &ident,
-        started.elapsed().as_secs_f64(),
-        &args.out,
-    ));
+    let mut text = String::new();
+    if tried.len() > 1 {
+        text += "input filter chosen on held-out motion (expected false torque, rms N m):";
+        for t in &tried {
+            text += &format!(" {}: {:.3};", filter_name(t.input_filter_hz), t.expected_false_torque_rms);
+        }
+        text += "\n";
+    }
+    text += &report(&arm, &ident, started.elapsed().as_secs_f64(), &args.out);
+    crate::write_stdout(&text);
     Ok(())
+}
+
+fn filter_name(hz: f64) -> String {
+    if hz > 0.0 {
+        format!("{hz} Hz")
+    } else {
+        "as recorded".into()
+    }
 }
 
 /// The console table: per joint the URDF's and the identification's rms on held-out motion.
@@ -212,6 +263,13 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
          expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}\n",
         arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
         s.projected_bodies, "joint", "URDF", "identified", "springs"
+    );
+    text = format!(
+        "signals: input filter {}, torque delay per joint {:?} ms, acceleration gain {}, estimate's 90 % step response {:.0} ms\n{text}",
+        filter_name(s.input_filter_hz),
+        s.delay_s.iter().map(|d| (1e4 * d).round() / 10.0).collect::<Vec<_>>(),
+        s.acceleration_gain,
+        1e3 * s.step_response_s
     );
     let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
     for (i, name) in arm.joint_names().enumerate() {

@@ -24,10 +24,14 @@ pub struct ImportArgs {
     /// Output rate (Hz); default: the median rate of the q topic.
     #[arg(long, value_name = "HZ", value_parser = positive_hz, allow_negative_numbers = true)]
     rate: Option<f64>,
-    /// Keep the messages before damaged MCAP data (a recorder that was killed leaves a
-    /// truncated file) instead of failing; the loss is reported.
+    /// Skip damaged MCAP chunks and keep the messages before the end of a truncated file
+    /// (a recorder that was killed) instead of failing; the loss is reported and counted.
     #[arg(long)]
     accept_damaged: bool,
+    /// Import a recording whose rate (or a --rate) is under 200 Hz, the least the loop
+    /// needs, with a warning instead of refusing it.
+    #[arg(long)]
+    accept_low_rate: bool,
 }
 
 fn positive_hz(text: &str) -> Result<f64, String> {
@@ -50,6 +54,7 @@ pub fn import(args: &ImportArgs) -> Result<(), CliError> {
     let options = ImportOptions {
         rate_hz: args.rate,
         accept_damage: args.accept_damaged,
+        accept_low_rate: args.accept_low_rate,
     };
     let report = import_to_csv(&args.bag, &profile, &options, &args.out).map_err(bag_error)?;
     crate::write_stdout(&format!(
@@ -58,14 +63,20 @@ pub fn import(args: &ImportArgs) -> Result<(), CliError> {
         profile.description,
         args.out.display()
     ));
+    for warning in report.notes.iter().filter(|n| n.starts_with("WARNING")) {
+        eprintln!("admittance: {warning}");
+    }
     if report.skipped() > 0 || !report.damage.is_empty() {
         eprintln!(
             "admittance: warning: {} message(s) skipped{}; see the list above",
             report.skipped(),
             if report.damage.is_empty() {
-                ""
+                String::new()
             } else {
-                " and damaged data accepted"
+                format!(
+                    ", {} damaged chunk(s) skipped and damaged data accepted",
+                    report.skipped_chunks
+                )
             }
         );
     }

@@ -98,6 +98,7 @@ pub fn report_message(dir: &Path) -> String {
 fn clean_up() {
     let commit = admittance_runfolder::commit_guard();
     remove_registered();
+    admittance_files::remove_pending();
     // Held until the process ends: nothing may be renamed into place any more.
     std::mem::forget(commit);
 }

@@ -19,8 +19,11 @@
 //! Every failure prints one or two lines on stderr naming the file, line, key or value,
 //! and how to fix it.
 
+mod calibrate_cmd;
+mod deploy_cmd;
 mod dynamics_cmd;
 mod evaluate_cmd;
+mod evaluate_contact;
 mod excite_cmd;
 mod gains_cmd;
 mod identify_cmd;
@@ -69,8 +72,13 @@ enum Command {
     Identify(identify_cmd::IdentifyArgs),
     /// Run every estimator the given files allow over a free-motion recording and print its false torque.
     Evaluate(evaluate_cmd::EvaluateArgs),
+    /// Contact and collision thresholds for a stated false-alarm rate, from free motion the
+    /// identification did not fit (a contact-floor file).
+    CalibrateContact(calibrate_cmd::CalibrateContactArgs),
     /// Free-motion training data (CSV) from a rosbag2 MCAP bag recorded on a real arm.
     Import(import_cmd::ImportArgs),
+    /// Write the folder a robot's loop reads (adm_create, ros2 bridge, Python RobotLoop.load): loop.toml, URDF, identification, network, manifest. Never trains.
+    Deploy(deploy_cmd::DeployArgs),
     /// ROS 2 without ROS: the observer on a robot's JointState topic, the estimate published
     /// (docs/ros2.md).
     #[cfg(feature = "ros2")]
@@ -157,7 +165,9 @@ fn main() -> ExitCode {
         Command::Excite(args) => excite_cmd::excite(&args),
         Command::Identify(args) => identify_cmd::identify_cmd(&args),
         Command::Evaluate(args) => evaluate_cmd::evaluate(&args),
+        Command::CalibrateContact(args) => calibrate_cmd::calibrate_contact(&args),
         Command::Import(args) => import_cmd::import(&args),
+        Command::Deploy(args) => deploy_cmd::deploy(&args),
         #[cfg(feature = "ros2")]
         Command::Ros2(args) => admittance_ros2::cli::run(&args).map_err(|f| CliError {
             code: f.code,

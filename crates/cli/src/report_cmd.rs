@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 
 use admittance_report::ReportError;
-use admittance_runfolder::{files, temp_sibling};
 use clap::Args;
 
 use crate::progress::{self, Spinner};
@@ -29,14 +28,8 @@ pub struct ReportArgs {
 pub fn report(args: &ReportArgs) -> Result<(), CliError> {
     let started = std::time::Instant::now();
     crate::interrupt::set_message(&crate::interrupt::report_message(&args.dir));
-    for name in [
-        files::FIGURES,
-        files::REPORT_MD,
-        files::REPORT_HTML,
-        files::RECORDING,
-    ] {
-        crate::interrupt::remove_on_interrupt(temp_sibling(&args.dir.join(name)), None);
-    }
+    // The temporary files and folder the report writes are removed on Ctrl-C by
+    // `admittance_files::remove_pending` (their names are unpredictable).
     let spinner = Spinner::start(
         progress::wanted(args.quiet),
         "writing figures, report and recording",

@@ -73,6 +73,7 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             max_plant_steps: args.max_plant_steps,
             max_series_bytes: args.max_series_gb * (1u64 << 30) as f64,
         },
+        cache_only: false,
     };
     let started = std::time::Instant::now();
     let report_options = admittance_report::Options {

@@ -15,9 +15,13 @@
 
 mod args;
 mod data;
+mod recorded;
 
 pub use args::{non_negative_hz, positive_number};
 pub use data::{load as load_data, warn_if_repeating};
+pub use recorded::{
+    check_network, input_filter_hz, network_filter_hz, IdentificationFile, Learned,
+};
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -54,8 +58,9 @@ pub struct TrainArgs {
     /// Second low-pass (Hz) on q and tau before differentiating again, the observer input
     /// conditioning of the scenarios (`observer.input_filter_hz`); 0: the columns as recorded.
     /// The observer must be fed the same conditioning at run time (`admittance_loop::InputConditioner`).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_hz, allow_negative_numbers = true)]
-    input_filter_hz: f64,
+    /// Default: with --nominal, the identification's (another value is an error); else 0.
+    #[arg(long, value_parser = non_negative_hz, allow_negative_numbers = true)]
+    input_filter_hz: Option<f64>,
     /// A separate free-motion recording (another motion, same columns) that chooses the
     /// ridge parameter and measures the validation error; every row of --data trains.
     #[arg(long, conflicts_with_all = ["validation_fraction", "folds"])]
@@ -153,18 +158,23 @@ fn validation_split(args: &TrainArgs) -> ValidationSplit {
     }
 }
 
-/// Inputs and targets of `path` for `joints` (conditioned, minus the identified model).
+/// Inputs and targets of `path` for `joints` (conditioned, minus the identified model on
+/// the torque paired as the identification was fitted: its delay).
 fn target_arrays(
     path: &std::path::Path,
     joints: &[String],
     filter_hz: f64,
-    ident: Option<&admittance_dynamics::Identification>,
+    ident: Option<&IdentificationFile>,
 ) -> Result<(admittance_scenario::FreeMotionData, Vec<f64>, Vec<f64>), CliError> {
     let data = data::load(path, Some(joints))?;
-    let (x, mut y) = data::arrays(path, &data, filter_hz, None)?;
-    if let Some(id) = ident {
-        data::subtract_identified(id, &x, &mut y)?;
-    }
+    let (x, y) = match ident {
+        Some(id) => {
+            let (x, mut y) = recorded::network_arrays(&id.paired(path, &data, filter_hz)?);
+            data::subtract_identified(&id.ident, &x, &mut y)?;
+            (x, y)
+        }
+        None => data::arrays(path, &data, filter_hz, None)?,
+    };
     Ok((data, x, y))
 }
 
@@ -173,11 +183,16 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
     let arm = crate::dynamics_cmd::load(&args.chain)?;
     let joints: Vec<String> = arm.joint_names().map(String::from).collect();
     let ident = match &args.nominal {
-        Some(p) => Some(data::identification(p, &arm)?),
+        Some(p) => Some(IdentificationFile::load(p, &arm)?),
         None => None,
     };
-    let id = ident.as_ref().map(|(i, _)| i);
-    let filter = args.input_filter_hz;
+    // The residual is of the identification on the signals it was fitted on.
+    let recorded: Vec<(String, f64)> = ident
+        .iter()
+        .map(|i| (i.path.display().to_string(), i.input_filter_hz))
+        .collect();
+    let filter = input_filter_hz(args.input_filter_hz, &recorded)?;
+    let id = ident.as_ref();
     let (data, x, y) = target_arrays(&args.data, &joints, filter, id)?;
     let n = data.dof();
     let train_rows = data::training_rows(&args.data, &data, args.validation_fraction)?;
@@ -194,8 +209,10 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         cv_folds: args.folds,
         budget: args.budget.budget(),
         // A residual on an identification keeps the identification alone where it does
-        // not pay on unseen motion.
+        // not pay on unseen motion; without a recording of other motion nothing shows that
+        // it pays (issue 30): every output is zero.
         zero_unhelpful_outputs: ident.is_some(),
+        zero_all_outputs: ident.is_some() && args.validation.is_none(),
         ..BroadConfig::default()
     };
     if let Some(seed) = args.seed {
@@ -225,8 +242,8 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         input_filter_hz: filter,
         validation: split,
         target: match &ident {
-            Some((_, checksum)) => TrainingTarget::IdentifiedResidual {
-                checksum: *checksum,
+            Some(i) => TrainingTarget::IdentifiedResidual {
+                checksum: i.checksum,
             },
             None => TrainingTarget::FreeMotionTorque,
         },
@@ -248,11 +265,23 @@ pub fn train(args: &TrainArgs) -> Result<(), CliError> {
         seconds,
         fmt_list(&report.validation_nrmse),
         fmt_list(&report.validation_rmse),
-        zeroed_line(&report.zeroed_outputs, &joints),
+        if config.zero_all_outputs {
+            no_evidence_line()
+        } else {
+            zeroed_line(&report.zeroed_outputs, &joints)
+        },
         net.coverage_threshold().map_or("none".into(), |t| format!("{t:.4}")),
         args.out.display()
     ));
     Ok(())
+}
+
+/// Why a residual without `--validation` is all zeros.
+fn no_evidence_line() -> String {
+    "zeroed (every output): no --validation recording of other motion, and cross-validation over \
+     one recording is not evidence that a residual pays on new motion; the hybrid observer is the \
+     momentum observer on the identification (give another recording as --validation to fit one)\n"
+        .into()
 }
 
 /// The outputs a residual fit set to zero, by joint name (empty when none).
@@ -321,7 +350,7 @@ fn grow_identification(
     args: &GrowArgs,
     settings: &DataSettings,
     urdf: Option<&admittance_dynamics::Model>,
-) -> Result<Option<admittance_dynamics::Identification>, CliError> {
+) -> Result<Option<IdentificationFile>, CliError> {
     let model = args.model.display();
     let TrainingTarget::IdentifiedResidual { checksum } = settings.target else {
         return match &args.nominal {
@@ -337,7 +366,8 @@ fn grow_identification(
             "{model} learned an identified model's residual: give its identification file with --nominal and the arm with --urdf"
         )));
     };
-    let (ident, found) = data::identification(path, arm)?;
+    let ident = IdentificationFile::load(path, arm)?;
+    let found = ident.checksum;
     if found != checksum {
         return Err(CliError::input(format!(
             "{}: checksum {found:016x}, but {model} learned the residual of the identification with checksum {checksum:016x}",
@@ -442,15 +472,24 @@ pub fn grow(args: &GrowArgs) -> Result<(), CliError> {
         &config,
     );
     let estimate = check_budget(&size, &config.budget).map_err(learn_error)?;
-    let (x, mut y) = data::arrays(
-        &args.data,
-        &data,
-        settings.input_filter_hz,
-        nominal.as_ref(),
-    )?;
-    if let Some(id) = &ident {
-        data::subtract_identified(id, &x, &mut y)?;
-    }
+    let (x, y) = match &ident {
+        // The identification's residual on the torque paired as it was fitted (as `train`).
+        Some(id) => {
+            let (x, mut y) = recorded::network_arrays(&id.paired(
+                &args.data,
+                &data,
+                settings.input_filter_hz,
+            )?);
+            data::subtract_identified(&id.ident, &x, &mut y)?;
+            (x, y)
+        }
+        None => data::arrays(
+            &args.data,
+            &data,
+            settings.input_filter_hz,
+            nominal.as_ref(),
+        )?,
+    };
     let (train, validation) = data::datasets(
         &args.data,
         &data,

@@ -267,6 +267,8 @@ pub struct Admittance {
     stiffness: Vec<f64>,
     inertia: Option<Vec<f64>>,
     saturation: Option<Saturation>,
+    /// Per-joint deadband on the estimate (issue 31, item 3); empty: none.
+    deadband: Vec<f64>,
     x: Vec<f64>,
     xdot: Vec<f64>,
     q_a: Vec<f64>,
@@ -297,6 +299,7 @@ impl Admittance {
             stiffness,
             inertia,
             saturation,
+            deadband: Vec::new(),
             x: vec![0.0; n],
             xdot: vec![0.0; n],
             q_a: vec![0.0; n],
@@ -312,6 +315,41 @@ impl Admittance {
     /// Number of joints.
     pub fn dof(&self) -> usize {
         self.n
+    }
+
+    /// The same model with a deadband on the estimate per joint (N m; docs/method.md
+    /// section 2, "Deadband"; issue 31, item 3), e.g. a contact floor's thresholds: an
+    /// estimate within it moves nothing, above it only the excess drives the model, through
+    /// the smooth knee of [`soft_deadband`](crate::soft_deadband). Values of 0 leave a joint
+    /// as without a deadband (the default).
+    pub fn with_deadband(mut self, deadband: &[f64]) -> Result<Self, ConfigError> {
+        if deadband.len() != self.n {
+            return Err(ConfigError::new(
+                "deadband",
+                format!(
+                    "has {} values for {} joints: give one per joint",
+                    deadband.len(),
+                    self.n
+                ),
+            ));
+        }
+        if let Some(i) = deadband.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
+            return Err(ConfigError::new(
+                format!("deadband[{i}]"),
+                format!("is {}: must be finite and >= 0 (N m)", deadband[i]),
+            ));
+        }
+        self.deadband = if deadband.iter().all(|d| *d == 0.0) {
+            Vec::new()
+        } else {
+            deadband.to_vec()
+        };
+        Ok(self)
+    }
+
+    /// The deadband per joint (empty when there is none).
+    pub fn deadband(&self) -> &[f64] {
+        &self.deadband
     }
 
     /// The saturation, if configured.
@@ -353,7 +391,10 @@ impl Admittance {
             return StepStatus::Fault(fault);
         }
         for i in 0..self.n {
-            let tau = input.external_torque_estimate[i];
+            let mut tau = input.external_torque_estimate[i];
+            if let Some(&d) = self.deadband.get(i) {
+                tau = crate::contact::soft_deadband(tau, d);
+            }
             let (c, g) = (self.damping[i], self.stiffness[i]);
             let xddot;
             match &self.inertia {

@@ -43,6 +43,7 @@
 mod admittance;
 mod baselines;
 mod config;
+mod contact;
 mod controller;
 mod error;
 pub mod gains;
@@ -55,12 +56,18 @@ mod observer;
 mod reference;
 mod safe_hold;
 mod task_space;
+mod wrench;
 
 pub use admittance::{
     saturate, Admittance, AdmittanceConfig, AdmittanceInput, Saturation, SaturationConfig,
 };
 pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, PdController};
 pub use config::{AxisValues, JointValues};
+pub use contact::{
+    calibrate_contact, calibrate_contact_with, ContactCalibration, ContactCalibrationConfig,
+    ContactDetector, ContactFloor, ContactState, CONTACT_FLOOR_FORMAT,
+    CONTACT_FLOOR_FORMAT_VERSION, soft_deadband, DEADBAND_KNEE,
+};
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};
 pub use hybrid::HybridObserver;
@@ -77,6 +84,7 @@ pub use task_space::{
     AxisAdmittanceConfig, InverseKinematicsConfig, SingularityDampingConfig, TaskAxis,
     TaskSaturationConfig, TaskSpaceAdmittance, TaskSpaceAdmittanceConfig, TaskSpaceInput,
 };
+pub use wrench::{WrenchEstimator, DEFAULT_WRENCH_DAMPING};
 
 /// Re-exports from the learning layer used in the configuration of the networks.
 pub use admittance_learning::rbf::{

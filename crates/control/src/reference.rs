@@ -5,7 +5,6 @@
 use crate::admittance::{Admittance, AdmittanceInput, Saturation};
 use crate::error::{Fault, StepStatus};
 use crate::safe_hold::first_non_finite;
-use crate::task_space::TaskSpaceAdmittance;
 
 /// What an admittance model is given at each control step. All slices have one value per
 /// joint.
@@ -61,7 +60,8 @@ impl ReferenceInput<'_> {
 
 /// An admittance model that turns the desired trajectory and the external-torque estimate
 /// into the compliant joint reference `q_r, q_r', q_r''` for the controller: the
-/// joint-space [`Admittance`] and the [`TaskSpaceAdmittance`].
+/// joint-space [`Admittance`] and the [`TaskSpaceAdmittance`](crate::TaskSpaceAdmittance) (whose
+/// implementation lives beside it, so that this file imports nothing of the task space).
 ///
 /// Contract of [`step_reference`](Self::step_reference), for both: it never panics and
 /// never allocates; on a fault the state is unchanged, `q_r` is held with zero velocity and
@@ -112,29 +112,5 @@ impl CompliantReference for Admittance {
     }
     fn reset(&mut self) {
         Admittance::reset(self)
-    }
-}
-
-impl CompliantReference for TaskSpaceAdmittance {
-    fn dof(&self) -> usize {
-        TaskSpaceAdmittance::dof(self)
-    }
-    fn step_reference(&mut self, input: &ReferenceInput, dt: f64) -> StepStatus {
-        self.step(input, dt)
-    }
-    fn q_r(&self) -> &[f64] {
-        TaskSpaceAdmittance::q_r(self)
-    }
-    fn qdot_r(&self) -> &[f64] {
-        TaskSpaceAdmittance::qdot_r(self)
-    }
-    fn qddot_r(&self) -> &[f64] {
-        TaskSpaceAdmittance::qddot_r(self)
-    }
-    fn saturation(&self) -> Option<&Saturation> {
-        TaskSpaceAdmittance::saturation(self)
-    }
-    fn reset(&mut self) {
-        TaskSpaceAdmittance::reset(self)
     }
 }

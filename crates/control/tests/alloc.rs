@@ -403,3 +403,44 @@ fn no_step_allocates_after_construction() {
     // The counter itself works.
     assert!(count(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);
 }
+
+/// The contact detector (issue 31) and an admittance with a deadband allocate nothing per
+/// update, including wrong-length and non-finite inputs.
+#[test]
+fn no_contact_update_allocates() {
+    let n = 7;
+    let dt = 0.01;
+    let samples = 2000;
+    let estimate: Vec<f64> = (0..samples * n)
+        .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
+        .collect();
+    let qdot: Vec<f64> = (0..samples * n).map(|k| (k as f64 * 1e-3).sin()).collect();
+    let floor = calibrate_contact(&estimate, &qdot, &qdot, n, dt, 1.0).unwrap();
+    let mut det = ContactDetector::new(&floor).unwrap();
+    let mut adm = Admittance::new(n, &AdmittanceConfig::paper())
+        .unwrap()
+        .with_deadband(&floor.contact_thresholds)
+        .unwrap();
+    let zero = vec![0.0; n];
+    let mut push = vec![0.0; n];
+    let mut flags = 0;
+    let allocations = count(|| {
+        for k in 0..500 {
+            push[3] = k as f64 * 0.1;
+            let s = det.update(&push, &zero, &zero);
+            flags += usize::from(s.contact);
+            let input = AdmittanceInput {
+                q_d: &zero,
+                qdot_d: &zero,
+                qddot_d: &zero,
+                external_torque_estimate: &push,
+            };
+            assert!(adm.step(&input, 1e-3).is_ok());
+        }
+        push[0] = f64::NAN;
+        std::hint::black_box(det.update(&push, &zero, &zero));
+        std::hint::black_box(det.update(&push[..3], &zero, &zero));
+    });
+    assert_eq!(allocations, 0, "contact detector / deadband admittance");
+    assert!(flags > 0);
+}

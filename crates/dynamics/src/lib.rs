@@ -55,6 +55,7 @@ pub use identification::{
     excitation, identify, is_physically_consistent, BaseParameters, Excitation, ExcitationSettings,
     FourierSeries, Identification, IdentificationFile, IdentificationSettings,
     IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_VELOCITY_LIMIT,
+    identify_payload, DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION,
     IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION,
 };
 pub use model::{

@@ -7,12 +7,13 @@
 //   cargo build --release -p admittance-ffi
 //   g++ -std=c++17 -O2 -I crates/ffi/include crates/ffi/examples/libfranka_callback.cpp \
 //       target/release/libadmittance_ffi.a -lfranka -lpthread -ldl -lm -o libfranka_callback
-//   ./libfranka_callback 172.16.0.2 scenarios/panda_admittance.toml learned
+//   admittance deploy scenarios/panda_admittance.toml --variant learned --out deploy/panda
+//   ./libfranka_callback 172.16.0.2 deploy/panda
 //
-// The scenario names the arm (URDF, base, tip), the controller, the admittance model and
-// the observer with its trained network (from the cache that `admittance run` or
-// `admittance train` filled: adm_create trains when the cache has no entry, which is not
-// what you want on the robot's PC). Its URDF's joint order must be the robot's.
+// The deployment folder (docs/your_robot.md) names the arm (URDF, base, tip), the
+// controller, the admittance model and the observer with its trained network, each file
+// checked against the folder's manifest; adm_create never trains. Its URDF's joint order
+// must be the robot's. Without a desired motion the loop holds the first measured pose.
 //
 // Three things differ from the simulator and are handled here:
 // * Franka's FCI compensates gravity itself: the commanded torque must not contain it. The
@@ -36,16 +37,15 @@
 
 int main(int argc, char **argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: %s ROBOT_IP SCENARIO.toml [VARIANT]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s ROBOT_IP DEPLOY_DIR\n", argv[0]);
         return 2;
     }
-    // Not real-time: load the scenario and allocate the loop.
+    // Not real-time: load the deployment folder and allocate the loop.
     AdmConfig config;
     std::memset(&config, 0, sizeof config);
     config.abi_version = ADM_ABI_VERSION;
     config.n_joints = 7;
-    config.scenario_path = argv[2];
-    config.variant = argc > 3 ? argv[3] : nullptr;
+    config.deployment_path = argv[2];
     AdmHandle *loop = adm_create(&config);
     if (!loop) {
         char msg[1024];
@@ -76,7 +76,7 @@ int main(int argc, char **argv) {
             time += period.toSec();
             in.time = time;
             in.n_joints = 7;
-            in.flags = ADM_INPUT_TAU;  // measured link torques; the desired motion: the scenario's
+            in.flags = ADM_INPUT_TAU;  // measured link torques; no desired motion: the first pose is held
             for (int i = 0; i < 7; ++i) {
                 in.q[i] = state.q[i];
                 in.tau[i] = state.tau_J[i];

@@ -1,25 +1,22 @@
 //! The cost of the C ABI on a shared machine: `adm_step` against the Rust loop's step it
-//! wraps ([`RustLoop::step`]), in alternating blocks so that both see the same load.
+//! wraps ([`RobotLoop::step`]), in alternating blocks so that both see the same load.
 //! Each round times `BLOCK` steps of one, then `BLOCK` of the other (which goes first
 //! alternates); the medians over the rounds of the per-step times, and of the per-round
 //! difference, are printed. Blocks are short, so the medians leave out preemption by other
-//! processes (a block of milliseconds on a loaded machine times their work too). Same scenario and inputs as `benches/step.rs`
-//! (scenarios/admittance.toml, variant `momentum`, 7 joints, measured torques).
+//! processes (a block of milliseconds on a loaded machine times their work too). Same loop and inputs as `benches/step.rs`
+//! (the deployment of scenarios/admittance.toml's variant `momentum`, 7 joints, measured torques).
 //!
 //! Run: `cargo run --release -p admittance-ffi --example step_cost [ROUNDS]`
 
 use std::ffi::CString;
 use std::hint::black_box;
-use std::path::Path;
 use std::time::Instant;
 
 use admittance_ffi::*;
 
-const SCENARIO: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../scenarios/admittance.toml"
-);
-const VARIANT: &str = "momentum";
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 const N: usize = 7;
 /// Steps per timed block: short (about 25 us), so that a block is rarely preempted on a
 /// loaded machine and the medians leave out the blocks that were.
@@ -32,36 +29,34 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rounds: usize = std::env::args().nth(1).map_or(Ok(30_000), |s| s.parse())?;
-    let mut rust = RustLoop::new(&LoopSettings {
-        scenario: Path::new(SCENARIO),
-        variant: Some(VARIANT),
-        overrides: Vec::new(),
-        wrench_damping: None,
-    })?;
+    let (_tmp, dir) = common::deploy("momentum");
+    let mut rust = RobotLoop::load(&dir, &[]).expect("deployment folder");
     // One trajectory period (12 s): the arm tracking the scenario's desired motion with a
     // small error, with measured torques; index `k` is time `k` ms.
     let (mut q_d, mut qd, mut qdd) = ([0.0; N], [0.0; N], [0.0; N]);
     let mut ring: Vec<AdmInput> = (0..12_000)
         .map(|k| {
             let t = k as f64 * 1e-3;
-            rust.desired_at(t, &mut q_d, &mut qd, &mut qdd);
+            desired_at(t, &mut q_d, &mut qd, &mut qdd);
             let mut inp = AdmInput::ZERO;
             inp.n_joints = N as u32;
-            inp.flags = ADM_INPUT_TAU;
+            inp.flags = ADM_INPUT_TAU | ADM_INPUT_DESIRED;
             for (i, &p) in q_d.iter().enumerate() {
                 inp.q[i] = p + 0.01 * (t * (1.0 + i as f64)).sin();
                 inp.tau[i] = 0.5 * (3.0 * t).sin();
+                inp.q_d[i] = p;
+                inp.qdot_d[i] = qd[i];
+                inp.qddot_d[i] = qdd[i];
             }
             inp
         })
         .collect();
     let len = ring.len();
-    let (path, variant) = (CString::new(SCENARIO)?, CString::new(VARIANT)?);
+    let path = CString::new(dir.to_str().ok_or("path not UTF-8")?)?;
     let config = AdmConfig {
         abi_version: ADM_ABI_VERSION,
         n_joints: N as u32,
-        scenario_path: path.as_ptr(),
-        variant: variant.as_ptr(),
+        deployment_path: path.as_ptr(),
         overrides: std::ptr::null(),
         flags: 0,
         reserved: 0,
@@ -79,12 +74,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let start = Instant::now();
         for _ in 0..BLOCK {
             let inp = &ring[k_rust % len];
-            let report = rust.step(&StepInput {
+            let report = rust.step(&RobotInput {
                 time: k_rust as f64 * 1e-3,
                 q: black_box(&inp.q[..N]),
                 qdot: None,
                 tau: Some(black_box(&inp.tau[..N])),
-                desired: None,
+                desired: Some([&inp.q_d[..N], &inp.qdot_d[..N], &inp.qddot_d[..N]]),
             });
             black_box((report, rust.torque()[0]));
             k_rust += 1;
@@ -123,11 +118,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // SAFETY: a live handle, no longer used.
     unsafe { adm_destroy(h) };
     println!(
-        "step_cost: {rounds} rounds of {BLOCK} steps each: RustLoop::step median {:.0} ns, \
-         adm_step median {:.0} ns, adm_step - RustLoop::step per round: median {:+.0} ns",
+        "step_cost: {rounds} rounds of {BLOCK} steps each: RobotLoop::step median {:.0} ns, \
+         adm_step median {:.0} ns, adm_step - RobotLoop::step per round: median {:+.0} ns",
         median(&mut rust_ns),
         median(&mut c_ns),
         median(&mut diff_ns)
     );
     Ok(())
+}
+
+/// Experiment B's desired motion: the pose, with s0 at `1.0 sin(2 pi t / 12)`.
+fn desired_at(t: f64, q: &mut [f64; N], qd: &mut [f64; N], qdd: &mut [f64; N]) {
+    let w = std::f64::consts::TAU / 12.0;
+    q.copy_from_slice(&common::POSE);
+    qd.fill(0.0);
+    qdd.fill(0.0);
+    q[0] += (w * t).sin();
+    qd[0] = w * (w * t).cos();
+    qdd[0] = -w * w * (w * t).sin();
 }

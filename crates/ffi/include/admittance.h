@@ -11,7 +11,7 @@
 
 // Version of this ABI: bumped whenever a struct, a constant or a function changes.
 // `AdmConfig::abi_version` must equal it.
-#define ADM_ABI_VERSION 1
+#define ADM_ABI_VERSION 2
 
 // Capacity of every joint array (a chain may have fewer joints, never more).
 #define ADM_MAX_JOINTS 16
@@ -19,9 +19,10 @@
 // The step ran its normal law.
 #define ADM_OK 0
 
-// The step ran, and the controller detected a fault (non-finite or stale measurement,
-// non-finite reference or estimate, ...) and wrote its safe hold instead of the law:
-// `AdmOutput::fault` says which. The output is valid and should be sent.
+// The step ran, and a fault was detected (no angle yet, an implausible or non-finite or
+// stale measurement, a non-finite reference or estimate, ...): the output is the safe
+// value (zero before the first angles, else the controller's safe hold, or the law on
+// held signals) and should be sent; `AdmOutput::fault` says which.
 #define ADM_FAULT 1
 
 // A pointer argument was null. Nothing was read or written.
@@ -52,7 +53,7 @@
 #define ADM_INPUT_TAU (1 << 1)
 
 // `AdmInput::flags`: `q_d`, `qdot_d`, `qddot_d` hold the desired trajectory. Without it
-// the scenario's `[trajectory]` is evaluated at `time`.
+// the loop holds the first measured pose (`ADM_OUT_HOLDING_POSE`).
 #define ADM_INPUT_DESIRED (1 << 2)
 
 // `AdmOutput::flags`: the controller reported a fault and wrote its safe hold.
@@ -72,6 +73,29 @@
 
 // `AdmOutput::flags`: `wrench` and `wrench_tip` hold an estimate (`ADM_CONFIG_WRENCH`).
 #define ADM_OUT_WRENCH (1 << 5)
+
+// `AdmOutput::flags`: a measured value of this step was implausible (an angle beyond its
+// joint's limits by `signals.gates.angle_margin`, a jump faster than
+// `signals.gates.jump_factor` times the velocity limit, a torque beyond
+// `signals.gates.torque_factor` times the effort limit): it was replaced by NaN before
+// any filter, observer or admittance state saw it, and counted
+// (`AdmOutput::implausible_samples`). `fault` is `ADM_FAULT_IMPLAUSIBLE_MEASUREMENT`.
+#define ADM_OUT_IMPLAUSIBLE_INPUT (1 << 6)
+
+// `AdmOutput::flags`: some joint has not yet delivered a valid angle: the command is zero
+// (`fault` is `ADM_FAULT_NO_ANGLE_YET`).
+#define ADM_OUT_WAITING_FOR_ANGLES (1 << 7)
+
+// `AdmOutput::flags`: no desired motion was given (`ADM_INPUT_DESIRED` unset): the loop
+// holds the first pose at which every joint had a valid angle.
+#define ADM_OUT_HOLDING_POSE (1 << 8)
+
+// `AdmOutput::flags`: the contact detector (a deployment with `[contact]`) sees a contact;
+// `contact_link` names the last loaded joint.
+#define ADM_OUT_CONTACT (1 << 9)
+
+// `AdmOutput::flags`: the contact detector sees a collision (the upper level).
+#define ADM_OUT_COLLISION (1 << 10)
 
 // `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 // 1 us more per step on a 7-joint arm.
@@ -105,6 +129,14 @@
 // `AdmOutput::fault`: a dynamics or network call failed (reported, never a panic).
 #define ADM_FAULT_INTERNAL 8
 
+// `AdmOutput::fault`: a measured value was implausible (`ADM_OUT_IMPLAUSIBLE_INPUT`;
+// `fault_joint`): the step ran on the held signals, the controller's safe hold when it
+// was an angle.
+#define ADM_FAULT_IMPLAUSIBLE_MEASUREMENT 9
+
+// `AdmOutput::fault`: some joint has not yet delivered a valid angle: the command is zero.
+#define ADM_FAULT_NO_ANGLE_YET 10
+
 // An opaque loop: made by `adm_create`, stepped by `adm_step`, freed by `adm_destroy`.
 // One handle is stepped by one thread at a time (it is not synchronised).
 typedef struct AdmHandle AdmHandle;
@@ -115,15 +147,13 @@ typedef struct AdmConfig {
   uint32_t abi_version;
   // The joint count the caller will send: checked against the arm's chain at create.
   uint32_t n_joints;
-  // Path of the scenario TOML file (UTF-8, NUL-terminated): `[arm]` (URDF, base, tip),
-  // `[controller]`, `[admittance]` or `[task_admittance]`, `[observer]` (with
-  // `[observer.training]` for a learned network, loaded from the cache), `[trajectory]`,
-  // `plant.control_rate_hz` (the loop's period) and `plant.sensors.filter_cutoff_hz`
-  // (the differentiation filter). Relative paths inside it are relative to the file.
-  const char *scenario_path;
-  // The variant to use (NUL-terminated), or null for the file's base.
-  const char *variant;
-  // Overrides, or null: `KEY=VALUE` lines separated by newlines, as the CLI's `--set`
+  // Path of a deployment folder (UTF-8, NUL-terminated) written by `admittance deploy`:
+  // `loop.toml` (arm, rate, signal chain, controller, admittance model, observer,
+  // contact), the URDF, the identification and networks it names, and `manifest.json`
+  // with every file's checksum. `adm_create` never trains; a scenario file is refused
+  // with the `admittance deploy` command to run.
+  const char *deployment_path;
+  // Overrides of `loop.toml`, or null: `KEY=VALUE` lines separated by newlines
   // (`controller.pd.kp=[100, 150, 50, 50, 10, 10, 2]`).
   const char *overrides;
   // `ADM_CONFIG_*` bits.
@@ -137,9 +167,9 @@ typedef struct AdmConfig {
 
 // One control period's inputs.
 typedef struct AdmInput {
-  // Time of the sample (s), from any origin: the loop's warm-up counts from 0, and the
-  // scenario's trajectory is evaluated at it. One call per control period
-  // (`plant.control_rate_hz` of the scenario): the filters assume that period.
+  // Time of the sample (s), from any origin: the loop's warm-up counts from 0. One call
+  // per control period (`control_rate_hz` of `loop.toml`): the filters assume that
+  // period.
   double time;
   // The number of joints filled in: must be the handle's.
   uint32_t n_joints;
@@ -171,12 +201,19 @@ typedef struct AdmOutput {
   uint32_t n_joints;
   // `ADM_OUT_*` bits.
   uint32_t flags;
-  // `ADM_FAULT_*`: the controller's fault of this step, if any.
+  // `ADM_FAULT_*`: the fault of this step, if any.
   int32_t fault;
   // The first joint the fault names (chain order, 0-based), or 0.
   uint32_t fault_joint;
+  // Samples refused by the plausibility gates since `adm_create`.
+  uint64_t implausible_samples;
+  // With `ADM_OUT_CONTACT`: the last loaded joint (chain order); else -1.
+  int32_t contact_link;
+  // Reserved, zero.
+  uint32_t reserved;
   // The torque command to send (N m): finite and within the URDF's effort limits. With
-  // a fault it is the controller's safe hold.
+  // a controller fault it is the controller's safe hold; before every joint has
+  // delivered a valid angle it is zero.
   double tau_cmd[ADM_MAX_JOINTS];
   // The external-torque estimate (N m): the torque the environment (a person, a
   // contact) applies to the robot's joints, low-passed (`observer.cutoff_hz`), zero
@@ -208,11 +245,10 @@ extern "C" {
 // The version of the ABI the library was built with (`ADM_ABI_VERSION` of its header).
 uint32_t adm_abi_version(void);
 
-// Builds the loop of `config` (the scenario file's arm, controller, admittance model and
-// observer, with a learned network from the cache) and allocates all it will use. Not
-// real-time: it reads files, and may train a network when the cache has none. Returns
-// null on any error; `adm_last_error(NULL, ...)` on the same thread then says which file,
-// line and key.
+// Builds the loop of the deployment folder `config.deployment_path` (written by
+// `admittance deploy`: every file checked against its manifest) and allocates all it
+// will use. Not real-time: it reads files; it never trains. Returns null on any error;
+// `adm_last_error(NULL, ...)` on the same thread then names the file and key.
 //
 // # Safety
 // `config` is null or points to an `AdmConfig` whose strings are null or NUL-terminated.
@@ -251,7 +287,8 @@ size_t adm_last_error(const struct AdmHandle *handle, char *buf, size_t len);
 // `handle` is null or a live handle.
 uint32_t adm_n_joints(const struct AdmHandle *handle);
 
-// The control period the loop was built for (s; 1 / `plant.control_rate_hz`), 0 for null.
+// The control period the loop was built for (s; 1 / `control_rate_hz` of `loop.toml`), 0
+// for null.
 //
 // # Safety
 // `handle` is null or a live handle.

@@ -10,16 +10,17 @@ use std::os::raw::c_char;
 
 /// Version of this ABI: bumped whenever a struct, a constant or a function changes.
 /// `AdmConfig::abi_version` must equal it.
-pub const ADM_ABI_VERSION: u32 = 1;
+pub const ADM_ABI_VERSION: u32 = 2;
 
 /// Capacity of every joint array (a chain may have fewer joints, never more).
 pub const ADM_MAX_JOINTS: usize = 16;
 
 /// The step ran its normal law.
 pub const ADM_OK: i32 = 0;
-/// The step ran, and the controller detected a fault (non-finite or stale measurement,
-/// non-finite reference or estimate, ...) and wrote its safe hold instead of the law:
-/// `AdmOutput::fault` says which. The output is valid and should be sent.
+/// The step ran, and a fault was detected (no angle yet, an implausible or non-finite or
+/// stale measurement, a non-finite reference or estimate, ...): the output is the safe
+/// value (zero before the first angles, else the controller's safe hold, or the law on
+/// held signals) and should be sent; `AdmOutput::fault` says which.
 pub const ADM_FAULT: i32 = 1;
 /// A pointer argument was null. Nothing was read or written.
 pub const ADM_ERR_NULL: i32 = -1;
@@ -43,7 +44,7 @@ pub const ADM_INPUT_QDOT: u32 = 1;
 /// own last command in their place (as the simulator does).
 pub const ADM_INPUT_TAU: u32 = 1 << 1;
 /// `AdmInput::flags`: `q_d`, `qdot_d`, `qddot_d` hold the desired trajectory. Without it
-/// the scenario's `[trajectory]` is evaluated at `time`.
+/// the loop holds the first measured pose (`ADM_OUT_HOLDING_POSE`).
 pub const ADM_INPUT_DESIRED: u32 = 1 << 2;
 
 /// `AdmOutput::flags`: the controller reported a fault and wrote its safe hold.
@@ -58,6 +59,24 @@ pub const ADM_OUT_WARMUP: u32 = 1 << 3;
 pub const ADM_OUT_HELD: u32 = 1 << 4;
 /// `AdmOutput::flags`: `wrench` and `wrench_tip` hold an estimate (`ADM_CONFIG_WRENCH`).
 pub const ADM_OUT_WRENCH: u32 = 1 << 5;
+/// `AdmOutput::flags`: a measured value of this step was implausible (an angle beyond its
+/// joint's limits by `signals.gates.angle_margin`, a jump faster than
+/// `signals.gates.jump_factor` times the velocity limit, a torque beyond
+/// `signals.gates.torque_factor` times the effort limit): it was replaced by NaN before
+/// any filter, observer or admittance state saw it, and counted
+/// (`AdmOutput::implausible_samples`). `fault` is `ADM_FAULT_IMPLAUSIBLE_MEASUREMENT`.
+pub const ADM_OUT_IMPLAUSIBLE_INPUT: u32 = 1 << 6;
+/// `AdmOutput::flags`: some joint has not yet delivered a valid angle: the command is zero
+/// (`fault` is `ADM_FAULT_NO_ANGLE_YET`).
+pub const ADM_OUT_WAITING_FOR_ANGLES: u32 = 1 << 7;
+/// `AdmOutput::flags`: no desired motion was given (`ADM_INPUT_DESIRED` unset): the loop
+/// holds the first pose at which every joint had a valid angle.
+pub const ADM_OUT_HOLDING_POSE: u32 = 1 << 8;
+/// `AdmOutput::flags`: the contact detector (a deployment with `[contact]`) sees a contact;
+/// `contact_link` names the last loaded joint.
+pub const ADM_OUT_CONTACT: u32 = 1 << 9;
+/// `AdmOutput::flags`: the contact detector sees a collision (the upper level).
+pub const ADM_OUT_COLLISION: u32 = 1 << 10;
 
 /// `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 /// 1 us more per step on a 7-joint arm.
@@ -82,6 +101,12 @@ pub const ADM_FAULT_INVALID_TIME_STEP: i32 = 6;
 pub const ADM_FAULT_NONFINITE_OUTPUT: i32 = 7;
 /// `AdmOutput::fault`: a dynamics or network call failed (reported, never a panic).
 pub const ADM_FAULT_INTERNAL: i32 = 8;
+/// `AdmOutput::fault`: a measured value was implausible (`ADM_OUT_IMPLAUSIBLE_INPUT`;
+/// `fault_joint`): the step ran on the held signals, the controller's safe hold when it
+/// was an angle.
+pub const ADM_FAULT_IMPLAUSIBLE_MEASUREMENT: i32 = 9;
+/// `AdmOutput::fault`: some joint has not yet delivered a valid angle: the command is zero.
+pub const ADM_FAULT_NO_ANGLE_YET: i32 = 10;
 
 /// What `adm_create` builds the loop from. Zero-initialise it, then set the fields.
 #[repr(C)]
@@ -91,15 +116,13 @@ pub struct AdmConfig {
     pub abi_version: u32,
     /// The joint count the caller will send: checked against the arm's chain at create.
     pub n_joints: u32,
-    /// Path of the scenario TOML file (UTF-8, NUL-terminated): `[arm]` (URDF, base, tip),
-    /// `[controller]`, `[admittance]` or `[task_admittance]`, `[observer]` (with
-    /// `[observer.training]` for a learned network, loaded from the cache), `[trajectory]`,
-    /// `plant.control_rate_hz` (the loop's period) and `plant.sensors.filter_cutoff_hz`
-    /// (the differentiation filter). Relative paths inside it are relative to the file.
-    pub scenario_path: *const c_char,
-    /// The variant to use (NUL-terminated), or null for the file's base.
-    pub variant: *const c_char,
-    /// Overrides, or null: `KEY=VALUE` lines separated by newlines, as the CLI's `--set`
+    /// Path of a deployment folder (UTF-8, NUL-terminated) written by `admittance deploy`:
+    /// `loop.toml` (arm, rate, signal chain, controller, admittance model, observer,
+    /// contact), the URDF, the identification and networks it names, and `manifest.json`
+    /// with every file's checksum. `adm_create` never trains; a scenario file is refused
+    /// with the `admittance deploy` command to run.
+    pub deployment_path: *const c_char,
+    /// Overrides of `loop.toml`, or null: `KEY=VALUE` lines separated by newlines
     /// (`controller.pd.kp=[100, 150, 50, 50, 10, 10, 2]`).
     pub overrides: *const c_char,
     /// `ADM_CONFIG_*` bits.
@@ -115,9 +138,9 @@ pub struct AdmConfig {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct AdmInput {
-    /// Time of the sample (s), from any origin: the loop's warm-up counts from 0, and the
-    /// scenario's trajectory is evaluated at it. One call per control period
-    /// (`plant.control_rate_hz` of the scenario): the filters assume that period.
+    /// Time of the sample (s), from any origin: the loop's warm-up counts from 0. One call
+    /// per control period (`control_rate_hz` of `loop.toml`): the filters assume that
+    /// period.
     pub time: f64,
     /// The number of joints filled in: must be the handle's.
     pub n_joints: u32,
@@ -151,12 +174,19 @@ pub struct AdmOutput {
     pub n_joints: u32,
     /// `ADM_OUT_*` bits.
     pub flags: u32,
-    /// `ADM_FAULT_*`: the controller's fault of this step, if any.
+    /// `ADM_FAULT_*`: the fault of this step, if any.
     pub fault: i32,
     /// The first joint the fault names (chain order, 0-based), or 0.
     pub fault_joint: u32,
+    /// Samples refused by the plausibility gates since `adm_create`.
+    pub implausible_samples: u64,
+    /// With `ADM_OUT_CONTACT`: the last loaded joint (chain order); else -1.
+    pub contact_link: i32,
+    /// Reserved, zero.
+    pub reserved: u32,
     /// The torque command to send (N m): finite and within the URDF's effort limits. With
-    /// a fault it is the controller's safe hold.
+    /// a controller fault it is the controller's safe hold; before every joint has
+    /// delivered a valid angle it is zero.
     pub tau_cmd: [f64; ADM_MAX_JOINTS],
     /// The external-torque estimate (N m): the torque the environment (a person, a
     /// contact) applies to the robot's joints, low-passed (`observer.cutoff_hz`), zero
@@ -182,7 +212,7 @@ pub struct AdmOutput {
 }
 
 impl AdmOutput {
-    /// All zero.
+    /// All zero (`contact_link` -1: no contact).
     pub const ZERO: AdmOutput = AdmOutput {
         time: 0.0,
         step: 0,
@@ -190,6 +220,9 @@ impl AdmOutput {
         flags: 0,
         fault: 0,
         fault_joint: 0,
+        implausible_samples: 0,
+        contact_link: -1,
+        reserved: 0,
         tau_cmd: [0.0; ADM_MAX_JOINTS],
         tau_ext: [0.0; ADM_MAX_JOINTS],
         q_r: [0.0; ADM_MAX_JOINTS],
@@ -217,4 +250,4 @@ impl AdmInput {
 
 // No padding anywhere: the sizes are the sums of the fields.
 const _: () = assert!(std::mem::size_of::<AdmInput>() == 16 + 6 * 8 * ADM_MAX_JOINTS);
-const _: () = assert!(std::mem::size_of::<AdmOutput>() == 32 + 5 * 8 * ADM_MAX_JOINTS + 96);
+const _: () = assert!(std::mem::size_of::<AdmOutput>() == 48 + 5 * 8 * ADM_MAX_JOINTS + 96);

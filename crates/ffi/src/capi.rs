@@ -10,13 +10,15 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use crate::abi::*;
-use crate::engine::{LoopSettings, RustLoop, StepInput};
+use crate::engine::{output_of, report_of, RobotInput, RobotLoop};
 use crate::error_buf::{copy_to_c, ErrorBuf};
 
 /// An opaque loop: made by `adm_create`, stepped by `adm_step`, freed by `adm_destroy`.
 /// One handle is stepped by one thread at a time (it is not synchronised).
 pub struct AdmHandle {
-    engine: RustLoop,
+    engine: RobotLoop,
+    /// `ADM_CONFIG_WRENCH` was set.
+    wrench: bool,
     n: usize,
     steps: u64,
     /// The last good output, held after a panic.
@@ -57,11 +59,10 @@ unsafe fn c_str<'a>(p: *const c_char, what: &str) -> Result<Option<&'a str>, Str
         .map_err(|e| format!("AdmConfig.{what}: not UTF-8 ({e})"))
 }
 
-/// Builds the loop of `config` (the scenario file's arm, controller, admittance model and
-/// observer, with a learned network from the cache) and allocates all it will use. Not
-/// real-time: it reads files, and may train a network when the cache has none. Returns
-/// null on any error; `adm_last_error(NULL, ...)` on the same thread then says which file,
-/// line and key.
+/// Builds the loop of the deployment folder `config.deployment_path` (written by
+/// `admittance deploy`: every file checked against its manifest) and allocates all it
+/// will use. Not real-time: it reads files; it never trains. Returns null on any error;
+/// `adm_last_error(NULL, ...)` on the same thread then names the file and key.
 ///
 /// # Safety
 /// `config` is null or points to an `AdmConfig` whose strings are null or NUL-terminated.
@@ -103,33 +104,43 @@ unsafe fn create(config: *const AdmConfig) -> Result<AdmHandle, String> {
         ));
     }
     // SAFETY: the caller guarantees the strings are null or NUL-terminated.
-    let (path, variant, overrides) = unsafe {
+    let (path, overrides) = unsafe {
         (
-            c_str(c.scenario_path, "scenario_path")?,
-            c_str(c.variant, "variant")?,
+            c_str(c.deployment_path, "deployment_path")?,
             c_str(c.overrides, "overrides")?,
         )
     };
-    let path = path.ok_or("AdmConfig.scenario_path is null: name a scenario TOML file")?;
+    let path = path
+        .ok_or("AdmConfig.deployment_path is null: name a folder written by `admittance deploy`")?;
     if c.flags & !ADM_CONFIG_WRENCH != 0 {
         return Err(format!("AdmConfig.flags: unknown bits {:#x}", c.flags));
     }
-    let settings = LoopSettings {
-        scenario: Path::new(path),
-        variant,
-        overrides: overrides
-            .unwrap_or("")
-            .lines()
-            .map(str::trim)
-            .filter(|l| !l.is_empty())
-            .collect(),
-        wrench_damping: (c.flags & ADM_CONFIG_WRENCH != 0).then_some(c.wrench_damping),
-    };
-    let engine = RustLoop::new(&settings)?;
+    let dir = Path::new(path);
+    // A scenario file is not deployed in memory: that would need the simulator's crates
+    // here, and its networks may not be trained yet. Say what to run instead.
+    if dir.is_file() && dir.extension().is_some_and(|e| e == "toml") {
+        return Err(format!(
+            "{path}: is a file, adm_create takes a deployment folder: run \
+             `admittance deploy {path} [--variant NAME] --out DIR` and pass DIR"
+        ));
+    }
+    let overrides: Vec<&str> = overrides
+        .unwrap_or("")
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    let mut engine = RobotLoop::load(dir, &overrides).map_err(|e| e.text())?;
+    let wrench = c.flags & ADM_CONFIG_WRENCH != 0;
+    if wrench {
+        engine
+            .enable_wrench(c.wrench_damping)
+            .map_err(|e| format!("AdmConfig.wrench_damping: {}", e.text()))?;
+    }
     let n = engine.dof();
     if c.n_joints as usize != n {
         return Err(format!(
-            "{path}: AdmConfig.n_joints is {}, the [arm] chain has {n} joints ({})",
+            "{path}: AdmConfig.n_joints is {}, the arm's chain has {n} joints ({})",
             c.n_joints,
             engine.joints().join(", ")
         ));
@@ -138,6 +149,7 @@ unsafe fn create(config: *const AdmConfig) -> Result<AdmHandle, String> {
     last.n_joints = n as u32;
     Ok(AdmHandle {
         engine,
+        wrench,
         n,
         steps: 0,
         last,
@@ -221,7 +233,7 @@ fn step(h: &mut AdmHandle, input: &AdmInput, output: &mut AdmOutput) -> i32 {
     }
     let n = h.n;
     let has = |bit: u32| input.flags & bit != 0;
-    let report = h.engine.step(&StepInput {
+    let status = h.engine.step(&RobotInput {
         time: input.time,
         q: &input.q[..n],
         qdot: has(ADM_INPUT_QDOT).then(|| &input.qdot[..n]),
@@ -230,23 +242,8 @@ fn step(h: &mut AdmHandle, input: &AdmInput, output: &mut AdmOutput) -> i32 {
             .then(|| [&input.q_d[..n], &input.qdot_d[..n], &input.qddot_d[..n]]),
     });
     h.steps += 1;
-    *output = AdmOutput::ZERO;
-    output.time = input.time;
-    output.step = h.steps;
-    output.n_joints = n as u32;
-    output.flags = report.flags;
-    output.fault = report.fault;
-    output.fault_joint = report.fault_joint;
-    output.tau_cmd[..n].copy_from_slice(h.engine.torque());
-    output.tau_ext[..n].copy_from_slice(h.engine.external_torque_estimate());
-    let [q_r, qdot_r, qddot_r] = h.engine.reference();
-    output.q_r[..n].copy_from_slice(q_r);
-    output.qdot_r[..n].copy_from_slice(qdot_r);
-    output.qddot_r[..n].copy_from_slice(qddot_r);
-    if let Some((base, tip)) = h.engine.wrench() {
-        output.wrench.copy_from_slice(base);
-        output.wrench_tip.copy_from_slice(tip);
-    }
+    let report = report_of(&status, h.wrench);
+    *output = output_of(&h.engine, &report, input.time, h.steps);
     if report.fault == ADM_FAULT_NONE {
         ADM_OK
     } else {
@@ -311,7 +308,8 @@ pub unsafe extern "C" fn adm_n_joints(handle: *const AdmHandle) -> u32 {
     unsafe { handle.as_ref() }.map_or(0, |h| h.n as u32)
 }
 
-/// The control period the loop was built for (s; 1 / `plant.control_rate_hz`), 0 for null.
+/// The control period the loop was built for (s; 1 / `control_rate_hz` of `loop.toml`), 0
+/// for null.
 ///
 /// # Safety
 /// `handle` is null or a live handle.

@@ -1,5 +1,8 @@
 //! The C functions called from Rust: create errors that name the file and key, step
-//! statuses, the panic boundary, the error buffer, and `adm_step` against the Rust loop.
+//! statuses, the panic boundary, the error buffer, `adm_step` against the Rust loop, and
+//! one absurd finite sample on every observer (issue 34).
+
+mod common;
 
 use std::ffi::{CStr, CString};
 use std::os::raw::c_char;
@@ -7,20 +10,15 @@ use std::path::Path;
 
 use admittance_ffi::*;
 
-fn scenario() -> CString {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenarios/admittance.toml"
-    );
-    CString::new(path).unwrap()
+fn c_path(p: &Path) -> CString {
+    CString::new(p.to_str().unwrap()).unwrap()
 }
 
-fn config(path: &CString, variant: &CString) -> AdmConfig {
+fn config(path: &CString) -> AdmConfig {
     AdmConfig {
         abi_version: ADM_ABI_VERSION,
         n_joints: 7,
-        scenario_path: path.as_ptr(),
-        variant: variant.as_ptr(),
+        deployment_path: path.as_ptr(),
         overrides: std::ptr::null(),
         flags: ADM_CONFIG_WRENCH,
         reserved: 0,
@@ -67,7 +65,7 @@ fn create_fails(c: &AdmConfig, needles: &[&str]) {
     }
 }
 
-/// Input of period `k`: a slow motion around the scenario's pose.
+/// Input of period `k`: a slow motion around the experiment's pose.
 fn input(k: usize, n: usize, flags: u32) -> AdmInput {
     let pose = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
     let t = k as f64 * 1e-3;
@@ -86,48 +84,70 @@ fn input(k: usize, n: usize, flags: u32) -> AdmInput {
 
 #[test]
 fn create_errors_name_what_is_wrong() {
-    let (path, variant) = (scenario(), CString::new("momentum").unwrap());
+    let (_tmp, dir) = common::deploy("momentum");
+    let path = c_path(&dir);
     // SAFETY: null is accepted.
     assert!(unsafe { adm_create(std::ptr::null()) }.is_null());
     assert!(create_error().contains("config is null"));
 
-    let mut c = config(&path, &variant);
+    let mut c = config(&path);
     c.abi_version = 99;
     create_fails(&c, &["abi_version is 99"]);
 
-    let mut c = config(&path, &variant);
+    let mut c = config(&path);
     c.n_joints = 6;
     create_fails(
         &c,
-        &["admittance.toml", "n_joints is 6", "7 joints", "left_s0"],
+        &["deploy_momentum", "n_joints is 6", "7 joints", "left_s0"],
     );
 
-    let missing = CString::new("no/such/file.toml").unwrap();
-    create_fails(&config(&missing, &variant), &["no/such/file.toml"]);
+    let missing = CString::new("no/such/folder").unwrap();
+    create_fails(&config(&missing), &["no/such/folder", "admittance deploy", "manifest.json"]);
 
-    let oracle = CString::new("oracle").unwrap();
+    // A scenario file is refused with the command that deploys it.
+    let scenario = CString::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/admittance.toml"
+    ))
+    .unwrap();
     create_fails(
-        &config(&path, &oracle),
-        &["admittance.toml", "observer.kind", "oracle"],
+        &config(&scenario),
+        &["admittance.toml", "admittance deploy"],
     );
-
-    let unknown = CString::new("no_such_variant").unwrap();
-    create_fails(&config(&path, &unknown), &["no_such_variant"]);
 
     let overrides = CString::new("controller.pd.kp = [1.0, 2.0]").unwrap();
-    let mut c = config(&path, &variant);
+    let mut c = config(&path);
     c.overrides = overrides.as_ptr();
-    create_fails(&c, &["controller.pd.kp", "has 2 values", "7 joints"]);
+    create_fails(&c, &["loop.toml", "controller.pd", "kp", "has 2 values", "7 joints"]);
 
-    let mut c = config(&path, &variant);
+    let overrides = CString::new("observer.kind = \"oracle\"").unwrap();
+    let mut c = config(&path);
+    c.overrides = overrides.as_ptr();
+    create_fails(&c, &["observer.kind", "oracle"]);
+
+    let mut c = config(&path);
     c.flags = 1 << 7;
     create_fails(&c, &["AdmConfig.flags"]);
+
+    // An edited file fails its manifest; a missing one is named.
+    let urdf = dir.join("arm.urdf");
+    let mut text = std::fs::read_to_string(&urdf).unwrap();
+    text.push_str("<!-- edited -->\n");
+    std::fs::write(&urdf, text).unwrap();
+    create_fails(&config(&path), &["arm.urdf", "does not match the manifest"]);
+    std::fs::remove_file(&urdf).unwrap();
+    create_fails(&config(&path), &["arm.urdf", "cannot be read"]);
+
+    // A learned observer's network is refused when missing from the folder.
+    let (_tmp2, learned) = common::deploy("learned");
+    std::fs::remove_file(learned.join("observer.broad")).unwrap();
+    create_fails(&config(&c_path(&learned)), &["observer.broad"]);
 }
 
 #[test]
 fn step_statuses_and_errors() {
-    let (path, variant) = (scenario(), CString::new("momentum").unwrap());
-    let h = create(&config(&path, &variant));
+    let (_tmp, dir) = common::deploy("momentum");
+    let h = create(&config(&c_path(&dir)));
     // SAFETY: a live handle.
     unsafe {
         assert_eq!(adm_n_joints(h), 7);
@@ -195,8 +215,8 @@ fn step_statuses_and_errors() {
 
 #[test]
 fn a_panic_is_caught_the_output_held_and_the_handle_poisoned() {
-    let (path, variant) = (scenario(), CString::new("momentum").unwrap());
-    let h = create(&config(&path, &variant));
+    let (_tmp, dir) = common::deploy("momentum");
+    let h = create(&config(&c_path(&dir)));
     let mut out = AdmOutput::ZERO;
     for k in 0..100 {
         // SAFETY: valid pointers.
@@ -232,16 +252,10 @@ fn a_panic_is_caught_the_output_held_and_the_handle_poisoned() {
 /// `adm_step` gives the Rust loop's results bit for bit, for every input flag.
 #[test]
 fn the_c_step_equals_the_rust_step() {
-    let (path, variant) = (scenario(), CString::new("momentum").unwrap());
-    let h = create(&config(&path, &variant));
-    let path = Path::new(path.to_str().unwrap());
-    let mut rust = RustLoop::new(&LoopSettings {
-        scenario: path,
-        variant: Some("momentum"),
-        overrides: Vec::new(),
-        wrench_damping: Some(0.0),
-    })
-    .unwrap();
+    let (_tmp, dir) = common::deploy("momentum");
+    let h = create(&config(&c_path(&dir)));
+    let mut rust = RobotLoop::load(&dir, &[]).unwrap();
+    rust.enable_wrench(0.0).unwrap();
     let mut out = AdmOutput::ZERO;
     let flag_sets = [
         0,
@@ -254,28 +268,161 @@ fn the_c_step_equals_the_rust_step() {
         // SAFETY: valid pointers.
         let status = unsafe { adm_step(h, &inp, &mut out) };
         let has = |bit: u32| inp.flags & bit != 0;
-        let report = rust.step(&StepInput {
-            time: inp.time,
-            q: &inp.q[..7],
-            qdot: has(ADM_INPUT_QDOT).then_some(&inp.qdot[..7]),
-            tau: has(ADM_INPUT_TAU).then_some(&inp.tau[..7]),
-            desired: has(ADM_INPUT_DESIRED).then_some([
-                &inp.q_d[..7],
-                &inp.qdot_d[..7],
-                &inp.qddot_d[..7],
-            ]),
-        });
-        assert_eq!(status == ADM_FAULT, report.fault != ADM_FAULT_NONE);
-        assert_eq!((out.flags, out.fault), (report.flags, report.fault));
-        let bits = |s: &[f64]| s.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&out.tau_cmd[..7]), bits(rust.torque()), "step {k}");
-        assert_eq!(
-            bits(&out.tau_ext[..7]),
-            bits(rust.external_torque_estimate())
+        let report = report_of(
+            &rust.step(&RobotInput {
+                time: inp.time,
+                q: &inp.q[..7],
+                qdot: has(ADM_INPUT_QDOT).then_some(&inp.qdot[..7]),
+                tau: has(ADM_INPUT_TAU).then_some(&inp.tau[..7]),
+                desired: has(ADM_INPUT_DESIRED).then_some([
+                    &inp.q_d[..7],
+                    &inp.qdot_d[..7],
+                    &inp.qddot_d[..7],
+                ]),
+            }),
+            true,
         );
-        assert_eq!(bits(&out.q_r[..7]), bits(rust.reference()[0]));
-        assert_eq!(bits(&out.wrench), bits(rust.wrench().unwrap().0));
+        assert_eq!(status == ADM_FAULT, report.fault != ADM_FAULT_NONE);
+        let expected = output_of(&rust, &report, inp.time, k as u64 + 1);
+        let bits = |o: &AdmOutput| {
+            // SAFETY: AdmOutput is plain data without padding (asserted in abi.rs).
+            unsafe {
+                std::slice::from_raw_parts(
+                    (o as *const AdmOutput).cast::<u8>(),
+                    std::mem::size_of::<AdmOutput>(),
+                )
+            }
+            .to_vec()
+        };
+        assert_eq!(bits(&out), bits(&expected), "step {k}");
     }
     // SAFETY: a live handle.
     unsafe { adm_destroy(h) };
+}
+
+/// Safe by default (issue 32): before every joint has an angle the command is zero and the
+/// flag says why; without a desired motion the first measured pose is held.
+#[test]
+fn no_command_before_an_angle_and_the_first_pose_is_held() {
+    let (_tmp, dir) = common::deploy("momentum");
+    let h = create(&config(&c_path(&dir)));
+    let mut out = AdmOutput::ZERO;
+    let mut inp = input(0, 7, ADM_INPUT_TAU);
+    inp.q[5] = f64::NAN;
+    // SAFETY: valid pointers.
+    assert_eq!(unsafe { adm_step(h, &inp, &mut out) }, ADM_FAULT);
+    assert_eq!(out.fault, ADM_FAULT_NO_ANGLE_YET);
+    assert!(out.flags & ADM_OUT_WAITING_FOR_ANGLES != 0);
+    assert!(out.tau_cmd.iter().all(|&t| t == 0.0));
+    let first = input(1, 7, ADM_INPUT_TAU);
+    for k in 1..300 {
+        let mut inp = first;
+        inp.time = k as f64 * 1e-3;
+        // SAFETY: valid pointers.
+        assert_eq!(unsafe { adm_step(h, &inp, &mut out) }, ADM_OK, "step {k}");
+    }
+    assert!(out.flags & ADM_OUT_HOLDING_POSE != 0);
+    assert!(out.tau_cmd[..7].iter().any(|&t| t != 0.0));
+    for i in 0..7 {
+        assert!(
+            (out.q_r[i] - first.q[i]).abs() < 1e-9,
+            "joint {i}: {} vs {}",
+            out.q_r[i],
+            first.q[i]
+        );
+    }
+    // SAFETY: a live handle.
+    unsafe { adm_destroy(h) };
+}
+
+/// Issue 34: one torque of 1e300 and one angle of 1e20 through the C ABI, on every observer:
+/// flagged, counted, the command finite, and the estimate back on the clean run's within
+/// 1 s. With the gates off the same samples poison the estimate (the test can fail).
+#[test]
+fn one_absurd_sample_is_flagged_and_forgotten_on_every_observer() {
+    let model = common::model();
+    let mut data = admittance_dynamics::Data::new(&model);
+    let steps = 3000;
+    let inputs: Vec<AdmInput> = (0..steps)
+        .map(|k| {
+            let (q, tau) = common::motion(&model, &mut data, k);
+            let mut inp = AdmInput::ZERO;
+            inp.time = k as f64 * 1e-3;
+            inp.n_joints = 7;
+            inp.flags = ADM_INPUT_TAU;
+            inp.q[..7].copy_from_slice(&q);
+            inp.tau[..7].copy_from_slice(&tau);
+            inp
+        })
+        .collect();
+    let (torque_at, angle_at) = (1000, 1500);
+    let run = |dir: &Path, overrides: &str, absurd: bool| -> Vec<AdmOutput> {
+        let path = c_path(dir);
+        let overrides = CString::new(overrides).unwrap();
+        let mut c = config(&path);
+        c.overrides = overrides.as_ptr();
+        let h = create(&c);
+        let mut outs = Vec::with_capacity(steps);
+        for (k, inp) in inputs.iter().enumerate() {
+            let mut inp = *inp;
+            if absurd && k == torque_at {
+                inp.tau[1] = 1e300;
+            }
+            if absurd && k == angle_at {
+                inp.q[3] = 1e20;
+            }
+            let mut out = AdmOutput::ZERO;
+            // SAFETY: valid pointers.
+            unsafe { adm_step(h, &inp, &mut out) };
+            outs.push(out);
+        }
+        // SAFETY: a live handle.
+        unsafe { adm_destroy(h) };
+        outs
+    };
+    let gap = |a: &AdmOutput, b: &AdmOutput| {
+        (0..7)
+            .map(|i| (a.tau_ext[i] - b.tau_ext[i]).abs())
+            .fold(0.0, f64::max)
+    };
+    for kind in ["momentum", "learned", "hybrid"] {
+        let (_tmp, dir) = common::deploy(kind);
+        let clean = run(&dir, "", false);
+        let hit = run(&dir, "", true);
+        for (k, flagged) in [(torque_at, 1), (angle_at, 2)] {
+            let o = &hit[k];
+            assert!(o.flags & ADM_OUT_IMPLAUSIBLE_INPUT != 0, "{kind} step {k}");
+            assert_eq!(
+                o.fault, ADM_FAULT_IMPLAUSIBLE_MEASUREMENT,
+                "{kind} step {k}"
+            );
+            assert_eq!(o.implausible_samples, flagged, "{kind} step {k}");
+        }
+        let mut worst_after = 0.0f64;
+        let mut worst_during = 0.0f64;
+        for k in torque_at..steps {
+            let o = &hit[k];
+            assert!(
+                o.tau_cmd[..7].iter().all(|t| t.is_finite()),
+                "{kind} step {k}"
+            );
+            let g = gap(o, &clean[k]);
+            worst_during = worst_during.max(g);
+            if k >= angle_at + 1000 {
+                worst_after = worst_after.max(g);
+            }
+        }
+        eprintln!("{kind}: estimate off the clean run by at most {worst_during:.3e} N m, {worst_after:.3e} N m 1 s after");
+        assert!(worst_during < 1.0, "{kind}: {worst_during} N m");
+        assert!(worst_after < 1e-3, "{kind}: {worst_after} N m 1 s after");
+        // Without the gates, the same samples poison the estimate.
+        let open = run(&dir, "signals.gates.enabled = false", true);
+        let poisoned = (torque_at..steps)
+            .map(|k| gap(&open[k], &clean[k]))
+            .fold(0.0, f64::max);
+        assert!(
+            poisoned > 1e3 || poisoned.is_nan(),
+            "{kind}: ungated gap {poisoned}"
+        );
+    }
 }

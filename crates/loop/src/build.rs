@@ -9,6 +9,7 @@ use admittance_control::{
     MomentumObserver, NeuralController, Observer, PdController, TaskSpaceAdmittance,
 };
 use admittance_dynamics::Model;
+use admittance_learning::broad::{ArmCheck, ArmIdentity};
 
 use crate::closed_loop::{ClosedLoop, EstimateToController, LoopParts};
 use crate::config::{ControllerConfig, ControllerKind, LoopConfig, ObserverKind};
@@ -144,13 +145,15 @@ fn observer<Training>(
         MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)
     };
     let network = || {
-        trained.ok_or_else(|| {
-            LoopError::invalid(
-                "observer.kind",
-                "a learned observer needs its trained network",
-            )
-            .hint("train it first: the scenario runner does, from [observer.training]")
-        })
+        match (trained, &spec.network) {
+        (Some(trained), _) => Ok(trained),
+        (None, Some(path)) => network_file(model, path),
+        (None, None) => Err(LoopError::invalid(
+            "observer.kind",
+            "a learned observer needs its trained network",
+        )
+        .hint("name it in observer.network (admittance train writes one), or let the scenario runner train it from [observer.training]")),
+    }
     };
     let network_err = |e: ConfigError| LoopError::invalid("observer.training", e.to_string());
     Ok(match spec.kind {
@@ -167,4 +170,29 @@ fn observer<Training>(
             LearnedObserver::new(network()?, 0.0).map_err(network_err)?,
         )),
     })
+}
+
+/// The network file `observer.network` names, checked against the arm.
+fn network_file(model: &Model, path: &std::path::Path) -> Result<BroadModel, LoopError> {
+    let network = BroadModel::load(path)
+        .map_err(|e| LoopError::invalid("observer.network", e.to_string()))?;
+    checked_network(model, network, path)
+}
+
+/// `network` (read from `path`) when it was trained on `model`'s arm (joint names and the
+/// URDF's fingerprint). A network without a recorded arm (fitted in memory) cannot be
+/// checked: its sizes are checked by the observer.
+pub(crate) fn checked_network(
+    model: &Model,
+    network: BroadModel,
+    path: &std::path::Path,
+) -> Result<BroadModel, LoopError> {
+    let arm = ArmIdentity::new(model.joint_names(), model.fingerprint());
+    match network.check_arm(&arm) {
+        Ok(ArmCheck::Matches | ArmCheck::Unrecorded) => Ok(network),
+        Err(e) => Err(
+            LoopError::invalid("observer.network", format!("{}: {e}", path.display()))
+                .hint("train it on this arm's data, or deploy the arm it was trained for"),
+        ),
+    }
 }

@@ -21,6 +21,7 @@
 //! before the joint's first valid sample: nothing to hold).
 
 use crate::error::{check_len, LoopError};
+use crate::frozen::FrozenReadings;
 use crate::signal::{LowPass, Measurement};
 
 /// Filtered differentiation of encoder angles, and the command through the same filter;
@@ -36,6 +37,8 @@ pub struct SignalChain {
     prev_qf: Vec<f64>,
     prev_qdot: Vec<f64>,
     measurement: Measurement,
+    /// Readings repeated while the joint was moving (`crate::frozen`).
+    frozen: FrozenReadings,
 }
 
 impl SignalChain {
@@ -51,6 +54,7 @@ impl SignalChain {
             prev_qf: vec![0.0; n],
             prev_qdot: vec![0.0; n],
             measurement: Measurement::new(n),
+            frozen: FrozenReadings::new(n),
         })
     }
 
@@ -62,6 +66,15 @@ impl SignalChain {
         self.prev_qf.fill(0.0);
         self.prev_qdot.fill(0.0);
         self.measurement = Measurement::new(self.n);
+        self.frozen.reset();
+    }
+
+    /// Frozen readings so far: episodes in which a joint's angle, given by [`Self::sample`],
+    /// stayed bit-identical for at least 10 ms after changing at more than 0.3 rad/s (a
+    /// driver repeating its last packet; see `frozen.rs`). During such an episode the
+    /// joint's [`Measurement::sample_time`] is when the reading last changed.
+    pub fn stale_episodes(&self) -> u64 {
+        self.frozen.episodes()
     }
 
     /// Sample period (s).
@@ -86,7 +99,8 @@ impl SignalChain {
     }
 
     /// Takes the encoder angles `q` read at `time`, with `tau_commanded` the command held
-    /// over the period that just ended (non-finite values count as 0).
+    /// over the period that just ended, or the measured torque (a non-finite value holds
+    /// the joint's last torque, zero before the first).
     pub fn sample(
         &mut self,
         time: f64,
@@ -96,6 +110,13 @@ impl SignalChain {
         check_len("q", q, self.n)?;
         check_len("tau_commanded", tau_commanded, self.n)?;
         self.measurement.sample_time.fill(time);
+        // Without sample times from the caller, a reading repeated while moving is dated
+        // back to when it last changed.
+        for (i, &raw) in q.iter().enumerate() {
+            if let Some(taken) = self.frozen.update(i, time, raw) {
+                self.measurement.sample_time[i] = taken;
+            }
+        }
         self.filter_sample(time, q, tau_commanded);
         Ok(&self.measurement)
     }
@@ -121,14 +142,14 @@ impl SignalChain {
         self.measurement.time = time;
         for i in 0..self.n {
             self.filter_angle(i, q[i]);
-            let tau = if tau_commanded[i].is_finite() {
-                tau_commanded[i]
-            } else {
-                0.0
-            };
-            let m = &mut self.measurement;
-            m.tau_commanded[i] = tau;
-            m.tau_filtered[i] = self.tau_filter.update(i, tau);
+            // A non-finite torque (a robot's dropped or refused reading) never enters the
+            // filter: the last values are held (zero before the first).
+            let tau = tau_commanded[i];
+            if tau.is_finite() {
+                let m = &mut self.measurement;
+                m.tau_commanded[i] = tau;
+                m.tau_filtered[i] = self.tau_filter.update(i, tau);
+            }
         }
     }
 

@@ -21,6 +21,8 @@
 //! cutoff_hz = 5.0              # Hz, first-order low-pass of the estimate; 0: none
 //! input_filter_hz = 0.0        # Hz, second low-pass of the observer's inputs; 0: none
 //! warmup = 0.5                 # s, estimate held at zero
+//! identification = "ident.json" # the momentum part's nominal model (admittance identify)
+//! network = "observer.broad"    # learned / hybrid: the trained network (admittance train)
 //! [observer.momentum]          # MomentumObserverConfig
 //! ```
 
@@ -165,6 +167,13 @@ pub struct ObserverConfig<Training = NoTraining> {
     /// file's folder (by the scenario runner) or the working directory.
     #[serde(default)]
     pub identification: Option<std::path::PathBuf>,
+    /// The trained network of `learned` and `hybrid` (a file of `admittance train`,
+    /// `adm.train` or a scenario's training cache): the loop loads it and checks that it
+    /// was made for this arm. Default: absent (the caller hands the loop its network, or
+    /// the scenario runner trains it from `[observer.training]`). A relative path is taken
+    /// as `identification`'s.
+    #[serde(default)]
+    pub network: Option<std::path::PathBuf>,
     /// Cut-off (Hz) of a first-order low-pass applied to the estimate of every observer
     /// but `oracle` (docs/method.md sections 5 and 7); 0 disables it. Default 0.
     #[serde(default)]
@@ -198,6 +207,7 @@ impl<Training> Default for ObserverConfig<Training> {
             kind: ObserverKind::None,
             nominal_inertia_scale: unit(),
             identification: None,
+            network: None,
             cutoff_hz: 0.0,
             input_filter_hz: 0.0,
             warmup: default_warmup(),

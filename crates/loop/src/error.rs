@@ -55,6 +55,37 @@ impl LoopError {
         self
     }
 
+    /// The error with its hint, as one line (`key: message; hint: ...`): what a front end
+    /// shows (the C ABI's `adm_last_error`, Python, the command line).
+    pub fn text(&self) -> String {
+        match self {
+            LoopError::Invalid { hint: Some(h), .. } => format!("{self}; hint: {h}"),
+            _ => self.to_string(),
+        }
+    }
+
+    /// The error located in `file` when its key is a setting (a key that names a file
+    /// already, as the deployment's checks do, is left as it is).
+    pub fn located(self, file: &std::path::Path) -> Self {
+        let key = self.key();
+        if key.contains('/') || key.contains(std::path::MAIN_SEPARATOR) || key.is_empty() {
+            return self;
+        }
+        let prefix = file.display().to_string();
+        match self {
+            LoopError::Invalid { key, message, hint } => LoopError::Invalid {
+                key: format!("{prefix}: {key}"),
+                message,
+                hint,
+            },
+            LoopError::Component { section, source } => LoopError::Component {
+                section: format!("{prefix}: {section}"),
+                source,
+            },
+            other => other,
+        }
+    }
+
     /// The dotted key of the offending value (empty for a [`LoopError::Dimension`]).
     pub fn key(&self) -> String {
         match self {

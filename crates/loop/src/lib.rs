@@ -12,6 +12,11 @@
 //!   encoder angles, the command through the same filter) into a [`Measurement`];
 //!   [`InputConditioner`], the observers' second input filter; [`LowPass`].
 //!
+//! * [`RobotLoop`]: a real robot's period (raw angles and torques in, through the
+//!   plausibility gates ([`PlausibilityGates`]) and the signal chain, command, estimate,
+//!   wrench and contact flags out), built from a [`RobotConfig`] or a deployment folder
+//!   ([`Deployment`], `admittance deploy`); the C ABI, the ROS 2 bridge and Python wrap it.
+//!
 //! The simulator (`admittance-sim`) puts a fake encoder in front of the same
 //! [`SignalChain`]; the scenario runner (`admittance-scenario`) steps a [`ClosedLoop`]
 //! against it.
@@ -51,9 +56,15 @@ mod chain;
 mod closed_loop;
 mod conditioning;
 mod config;
+mod deployment;
 mod error;
+mod estimate_filter;
+mod frozen;
+mod gates;
 mod health;
 mod parts;
+mod robot;
+mod robot_config;
 mod signal;
 mod stage;
 mod validate;
@@ -65,10 +76,20 @@ pub use config::{
     ControllerConfig, ControllerKind, JointAdmittanceConfig, LoopConfig, NoTraining,
     ObserverConfig, ObserverKind, DEFAULT_CONTROL_RATE_HZ,
 };
+pub use deployment::{
+    write_deployment, Deployment, DEPLOYMENT_FORMAT, DEPLOYMENT_VERSION, LOOP_FILE, MANIFEST_FILE,
+};
 pub use error::LoopError;
+pub use estimate_filter::EstimateLowPass;
+pub use gates::{GateConfig, GateFault, Implausible, PlausibilityGates};
 pub use health::{
     Divergence, HealthMonitor, ESTIMATE_FACTOR, MAX_ANGLE, MIN_SPEED_BOUND, SPEED_FACTOR,
 };
 pub use parts::{Compliance, EstimateSource, LoopController};
+pub use robot::{RobotInput, RobotLoop, RobotStatus};
+pub use robot_config::{
+    ArmFile, ContactSection, RobotConfig, SignalsConfig, DEFAULT_SIGNAL_CUTOFF_HZ,
+    LOOP_FILE_FORMAT, LOOP_FILE_VERSION,
+};
 pub use signal::{LowPass, Measurement};
 pub use stage::{ObserverStage, ObserverStageSettings};

@@ -136,7 +136,7 @@ pub struct Measurement {
     pub qdot: Vec<f64>,
     /// Backward difference of `qdot`.
     pub qddot: Vec<f64>,
-    /// The command passed in (held over the period that just ended; non-finite values as 0).
+    /// The command (or measured torque) passed in; a non-finite value holds the last one.
     pub tau_commanded: Vec<f64>,
     /// `tau_commanded` through the same low-pass as `q_filtered`.
     pub tau_filtered: Vec<f64>,

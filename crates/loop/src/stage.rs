@@ -6,6 +6,7 @@ use admittance_control::{Observer, ObserverInput};
 
 use crate::conditioning::InputConditioner;
 use crate::error::LoopError;
+use crate::estimate_filter::EstimateLowPass;
 use crate::signal::Measurement;
 
 /// An observer with what it is fed: the sensors' signals, optionally through a second
@@ -54,14 +55,8 @@ impl ObserverStage {
         } else {
             None
         };
-        let dt = 1.0 / settings.rate_hz;
-        let cutoff_hz = settings.cutoff_hz;
         // First-order low-pass of the estimate: alpha = dt / (dt + 1 / (2 pi f_c)).
-        let alpha = if cutoff_hz > 0.0 {
-            dt / (dt + 1.0 / (2.0 * std::f64::consts::PI * cutoff_hz))
-        } else {
-            1.0
-        };
+        let alpha = EstimateLowPass::alpha(settings.cutoff_hz, settings.rate_hz);
         Ok(Self {
             observer,
             conditioner,
@@ -110,9 +105,7 @@ impl ObserverStage {
         if time < self.warmup {
             self.raw.fill(0.0);
         }
-        for (e, r) in estimate.iter_mut().zip(&self.raw) {
-            *e += self.alpha * (r - *e);
-        }
+        EstimateLowPass::step(self.alpha, &self.raw, estimate);
         self.previous_filtered_torque
             .copy_from_slice(&m.tau_filtered);
         ok

@@ -24,7 +24,10 @@ const JOINTS: &str = "one value per joint, in chain order";
 /// saturation); `bound=None` takes the range from the joint limits of `m` (centre and
 /// half-range of `[lower, upper]`; a joint without finite limits is not saturated), a number
 /// or one per joint is the half-range `C` about 0 (the paper: `bound=1.1`; `inf`: that joint
-/// not saturated). `Admittance.from_config` takes a scenario's `[admittance]` keys instead.
+/// not saturated). `deadband` (N m, one number or one per joint, e.g. a contact floor's
+/// `contact_thresholds`): an estimate within it moves nothing, above it only the excess
+/// drives the model, through a smooth knee (default: none). `Admittance.from_config` takes a
+/// scenario's `[admittance]` keys instead.
 ///
 /// `step` never raises on bad numbers: on a non-finite input or an invalid `dt` it keeps its
 /// state, returns the last reference with zero velocity and acceleration, and records the
@@ -72,7 +75,8 @@ impl PyAdmittance {
 
 stepped_pymethods!(PyAdmittance {
     #[new]
-    #[pyo3(signature = (m, damping, stiffness, mass=None, rho=Some(0.95), bound=None))]
+    #[pyo3(signature = (m, damping, stiffness, mass=None, rho=Some(0.95), bound=None, deadband=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         m: &Bound<'_, PyModel>,
         damping: &Bound<'_, PyAny>,
@@ -80,6 +84,7 @@ stepped_pymethods!(PyAdmittance {
         mass: Option<&Bound<'_, PyAny>>,
         rho: Option<f64>,
         bound: Option<&Bound<'_, PyAny>>,
+        deadband: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let pm = m.get();
         let n = pm.dof();
@@ -109,7 +114,18 @@ stepped_pymethods!(PyAdmittance {
             inertia,
             saturation,
         };
-        Self::build(n, &cfg, "Admittance", true)
+        let mut built = Self::build(n, &cfg, "Admittance", true)?;
+        if let Some(d) = deadband.filter(|d| !d.is_none()) {
+            let d = match d.extract::<f64>() {
+                Ok(v) => vec![v; n],
+                Err(_) => crate::convert::vector(d, "deadband", n, JOINTS)?,
+            };
+            built.inner = built
+                .inner
+                .with_deadband(&d)
+                .map_err(|e| config_error("Admittance", e))?;
+        }
+        Ok(built)
     }
 
     /// An admittance model from the keys of a scenario's `[admittance]` table (`damping`,

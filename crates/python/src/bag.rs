@@ -15,18 +15,23 @@ use crate::convert::value_error;
 /// dict: `t` `(N,)`, `q`, `qdot`, `qddot`, `tau` `(N, n)`, `joints`, `label` (the vendor's
 /// own estimate, `(N, k)`, with `label_names`) when the bag has one, and `report` (what was
 /// read and skipped, as text). `rate`: output rate in Hz (default: the q topic's median).
+/// `accept_damaged`: skip damaged chunks (counted in the report) instead of failing;
+/// `accept_low_rate`: import a recording under 200 Hz with a warning in the report.
 #[pyfunction]
-#[pyo3(signature = (path, profile, rate=None))]
+#[pyo3(signature = (path, profile, rate=None, accept_damaged=false, accept_low_rate=false))]
 pub fn import_bag<'py>(
     py: Python<'py>,
     path: PathBuf,
     profile: &str,
     rate: Option<f64>,
+    accept_damaged: bool,
+    accept_low_rate: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let profile = Profile::resolve(profile).map_err(|e| value_error(e.to_string()))?;
     let options = ImportOptions {
         rate_hz: rate,
-        accept_damage: false,
+        accept_damage: accept_damaged,
+        accept_low_rate,
     };
     let imported = py
         .detach(|| import(&path, &profile, &options))

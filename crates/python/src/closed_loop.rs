@@ -45,7 +45,7 @@ fn loop_error(context: &str, e: LoopError) -> PyErr {
 
 /// One control period of force-sensorless admittance control (the Rust `ClosedLoop`,
 /// docs/python.md): the encoder angles through the sensors' low-pass and differentiation
-/// (`sensor_cutoff_hz`, 0: none), the observer stage (input conditioning, estimate
+/// (`sensor_cutoff_hz`, the loop's one default `DEFAULT_SIGNAL_CUTOFF_HZ`, 20 Hz; 0: none), the observer stage (input conditioning, estimate
 /// low-pass, warm-up), the admittance model and the controller, as a scenario's variant runs
 /// them.
 ///
@@ -80,7 +80,7 @@ impl PyClosedLoop {
 #[pymethods]
 impl PyClosedLoop {
     #[new]
-    #[pyo3(signature = (m, config, network=None, *, sensor_cutoff_hz=0.0))]
+    #[pyo3(signature = (m, config, network=None, *, sensor_cutoff_hz=admittance_loop::DEFAULT_SIGNAL_CUTOFF_HZ))]
     fn new(
         m: &Bound<'_, PyModel>,
         config: &Bound<'_, PyAny>,

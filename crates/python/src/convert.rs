@@ -41,14 +41,34 @@ fn as_float_array<'py>(
     let asarray = ASARRAY.get_or_try_init(py, || -> PyResult<Py<PyAny>> {
         Ok(py.import("numpy")?.getattr("asarray")?.unbind())
     })?;
-    let kwargs = PyDict::new(py);
-    kwargs.set_item("dtype", "float64")?;
-    let converted = asarray.bind(py).call((obj,), Some(&kwargs)).map_err(|e| {
+    // Numbers only: integers and floats of any width convert; an object, string, boolean,
+    // complex or date array is refused (numpy would turn '1.5' into 1.5, True into 1.0, and
+    // drop imaginary parts).
+    let plain = asarray.bind(py).call1((obj,)).map_err(|e| {
         PyTypeError::new_err(format!(
             "`{name}` must be a float64 array-like of shape {expected}: {}",
             e.value(py)
         ))
     })?;
+    let dtype = plain.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(PyTypeError::new_err(format!(
+            "`{name}` has dtype {} (numpy kind '{kind}'): give numbers (a float64 array, or integers or float32 to convert)",
+            dtype.str()?
+        )));
+    }
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", "float64")?;
+    let converted = asarray
+        .bind(py)
+        .call((plain,), Some(&kwargs))
+        .map_err(|e| {
+            PyTypeError::new_err(format!(
+                "`{name}` must be a float64 array-like of shape {expected}: {}",
+                e.value(py)
+            ))
+        })?;
     converted
         .cast_into::<PyArrayDyn<f64>>()
         .map_err(|_| PyTypeError::new_err(format!("`{name}`: numpy.asarray gave no float64 array")))
@@ -168,6 +188,22 @@ pub fn first_non_finite(values: &[f64]) -> Option<(usize, f64)> {
         .enumerate()
         .find(|(_, v)| !v.is_finite())
         .map(|(i, v)| (i, *v))
+}
+
+/// A `ValueError` when the rows of `cols` values hold a NaN or infinity, naming
+/// `name[row, column]` (`name[column]` for a single row given as a vector).
+pub fn require_finite_rows(values: &[f64], cols: usize, single: bool, name: &str) -> PyResult<()> {
+    match first_non_finite(values) {
+        None => Ok(()),
+        Some((i, v)) if single => Err(PyValueError::new_err(format!(
+            "`{name}[{i}]` is {v}; give finite values"
+        ))),
+        Some((i, v)) => Err(PyValueError::new_err(format!(
+            "`{name}[{}, {}]` is {v}; give finite values",
+            i / cols.max(1),
+            i % cols.max(1)
+        ))),
+    }
 }
 
 /// A `ValueError` when `values` holds a NaN or infinity, naming `name[index]`.

@@ -91,6 +91,17 @@ fn dict_data(
                 k % n
             )));
         }
+        // The bound of the command line's CSV files: no joint signal in SI units comes near
+        // it, and beyond it the sums of squares of a fit overflow.
+        let limit = admittance_learning::broad::MAX_ABS_DATA_VALUE;
+        if let Some(k) = values.iter().position(|v| v.abs() > limit) {
+            return Err(value_error(format!(
+                "`{arg}`: '{sig}' row {}, joint {} is {:e}, beyond +-{limit:e}; give SI values (rad, rad/s, rad/s^2, N m)",
+                k / n,
+                k % n,
+                values[k]
+            )));
+        }
         signals.push(values);
     }
     let tau = signals.pop().unwrap_or_default();

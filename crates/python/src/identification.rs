@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use admittance_dynamics::{
-    excitation as rust_excitation, identify as rust_identify, Data, ExcitationSettings,
+    excitation as rust_excitation, Data, ExcitationSettings,
     Identification, IdentificationSettings, Model, Samples,
 };
 use numpy::PyArray2;
@@ -15,7 +15,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{rows, value_error, vector_out};
-use crate::free_motion::{data_arg, training_arrays};
+use crate::free_motion::{data_arg, training_arrays, DataArg};
+use admittance_scenario::FreeMotionData;
 use crate::model::PyModel;
 
 /// An identified arm (`identify`, `load_identification`): the rigid-body `model` with its
@@ -27,10 +28,12 @@ pub struct PyIdentification {
     pub(crate) identification: Arc<Identification>,
     /// The URDF model it was identified from (what files record).
     pub(crate) urdf: Arc<Model>,
+    /// The payload `with_payload` added (recorded in files `save` writes).
+    pub(crate) payload: Option<serde_json::Value>,
 }
 
 /// Splits conditioned rows `[q, qdot, qddot]` into the four arrays of `Samples`.
-struct Columns {
+pub(crate) struct Columns {
     q: Vec<f64>,
     qdot: Vec<f64>,
     qddot: Vec<f64>,
@@ -54,7 +57,7 @@ impl Columns {
             n,
         }
     }
-    fn samples(&self) -> Samples<'_> {
+    pub(crate) fn samples(&self) -> Samples<'_> {
         Samples {
             q: &self.q,
             qdot: &self.qdot,
@@ -63,6 +66,17 @@ impl Columns {
             dof: self.n,
         }
     }
+}
+
+/// `data` conditioned as an identification's samples (`columns`), for the payload fit.
+pub(crate) fn conditioned_columns(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    arg: &str,
+    model: &Model,
+    input_filter_hz: f64,
+) -> PyResult<Columns> {
+    columns(py, data, arg, model, input_filter_hz)
 }
 
 fn columns(
@@ -80,27 +94,59 @@ fn columns(
     Ok(Columns::new(&x, y, n))
 }
 
+/// The free-motion data of a `data` argument (a CSV path or a dict of arrays), its joints
+/// checked against the arm's.
+fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<FreeMotionData> {
+    let n = model.nq();
+    let joints: Vec<String> = model.joint_names().map(String::from).collect();
+    let (data, source) = match data_arg(data, arg, n, Some(&joints))? {
+        DataArg::Csv(path) => (
+            FreeMotionData::load(&path).map_err(|e| value_error(e.to_string()))?,
+            path.display().to_string(),
+        ),
+        DataArg::Arrays(d) => (d, format!("`{arg}`")),
+    };
+    if data.dof() != n || data.joints != joints {
+        return Err(value_error(format!(
+            "{source}: joints [{}] are not the arm's [{}] (chain order)",
+            data.joints.join(", "),
+            joints.join(", ")
+        )));
+    }
+    Ok(data)
+}
+
 /// Identifies the arm `m` from free-motion `data` (a CSV path or a dict of arrays, as for
 /// `train`): inertial parameters regularised toward the URDF and kept physically possible,
-/// and with `friction` each joint's rotor inertia, friction, offset and springs. Settings are
-/// chosen on `validation` (another recording) when given, else by blocked cross-validation
-/// over contiguous stretches of `data`; `input_filter_hz` conditions q and tau as the
-/// observers do at run time (0: the columns as recorded).
+/// and with `friction` each joint's rotor inertia, friction (dissipative), offset and
+/// springs. Settings are chosen on `validation` (another recording) when given, else by
+/// blocked cross-validation over contiguous stretches of `data`. `input_filter_hz`
+/// conditions q and tau as the observers do at run time (0: the columns as recorded);
+/// `None` (default): chosen on held-out motion among 4, 6 and 10 Hz and the columns as
+/// recorded. The choice, each joint's torque delay and the estimate's 90 % step-response
+/// time are in `summary` (`input_filter_hz`, `delay_s`, `step_response_s`).
 #[pyfunction]
-#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=0.0, springs=true))]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true))]
 pub fn identify(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
     m: &Bound<'_, PyModel>,
     friction: bool,
     validation: Option<&Bound<'_, PyAny>>,
-    input_filter_hz: f64,
+    input_filter_hz: Option<f64>,
     springs: bool,
 ) -> PyResult<PyIdentification> {
+    if let Some(f) = input_filter_hz {
+        if !(f.is_finite() && f >= 0.0) {
+            return Err(value_error(format!(
+                "`input_filter_hz` is {f}, must be >= 0 (0: the columns as recorded; None: chosen)"
+            )));
+        }
+    }
     let urdf = m.get().model.clone();
-    let train = columns(py, data, "data", &urdf, input_filter_hz)?;
+    let train = recording(data, "data", &urdf)?;
     let validation = match validation.filter(|v| !v.is_none()) {
-        Some(v) => Some(columns(py, v, "validation", &urdf, input_filter_hz)?),
+        Some(v) => Some(recording(v, "validation", &urdf)?),
         None => None,
     };
     let settings = IdentificationSettings {
@@ -115,19 +161,22 @@ pub fn identify(
             crate::free_motion::warn_repeating(py, "data", period)?;
         }
     }
-    let ident = py
+    let (ident, _tried) = py
         .detach(|| {
-            rust_identify(
+            admittance_scenario::identify_recording(
                 &urdf,
-                &train.samples(),
-                validation.as_ref().map(|v| v.samples()).as_ref(),
+                &train,
+                train.len(),
+                validation.as_ref(),
                 &settings,
+                input_filter_hz,
             )
         })
-        .map_err(|e| value_error(e.to_string()))?;
+        .map_err(value_error)?;
     Ok(PyIdentification {
         identification: Arc::new(ident),
         urdf,
+        payload: None,
     })
 }
 
@@ -156,6 +205,7 @@ pub fn load_identification(
     Ok(PyIdentification {
         identification: Arc::new(ident),
         urdf,
+        payload: None,
     })
 }
 
@@ -173,6 +223,9 @@ impl PyIdentification {
         let (q, rq, single) = rows(q, "q", n, true)?;
         let (qd, rqd, _) = rows(qdot, "qdot", n, true)?;
         let (qdd, rqdd, _) = rows(qddot, "qddot", n, true)?;
+        for (v, name) in [(&q, "q"), (&qd, "qdot"), (&qdd, "qddot")] {
+            crate::convert::require_finite_rows(v, n, single, name)?;
+        }
         if rq != rqd || rq != rqdd {
             return Err(value_error(format!(
                 "`q`, `qdot` and `qddot` have {rq}, {rqd} and {rqdd} rows"
@@ -236,9 +289,35 @@ impl PyIdentification {
             "data".to_string(),
             serde_json::Value::from(data.unwrap_or_else(|| "from Python".into())),
         );
+        if let Some(record) = &self.payload {
+            provenance.insert("payload".to_string(), record.clone());
+        }
         self.identification
             .save(&path, &self.urdf, provenance)
             .map_err(|e| value_error(e.to_string()))
+    }
+
+    /// This identification carrying `payload` (`identify_payload`, or a known `Payload`)
+    /// rigidly at the tip frame: its inertia added to the last body; joint terms and summary
+    /// kept. `save` records the payload in the file's `data`.
+    fn with_payload(&self, payload: &Bound<'_, crate::payload::PyPayload>) -> PyResult<Self> {
+        let p = payload.get().payload;
+        let carried = self
+            .identification
+            .with_payload(&p)
+            .map_err(|e| value_error(e.to_string()))?;
+        let i = &p.inertia;
+        let record = serde_json::json!({
+            "mass_kg": p.mass,
+            "com_m": p.com.as_slice(),
+            "inertia_kg_m2": (0..3).map(|r| [i[(r, 0)], i[(r, 1)], i[(r, 2)]]).collect::<Vec<_>>(),
+            "frame": self.urdf.tip().name,
+        });
+        Ok(PyIdentification {
+            identification: Arc::new(carried),
+            urdf: self.urdf.clone(),
+            payload: Some(record),
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -280,11 +359,16 @@ pub(crate) fn nominal_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Arc<Id
 }
 
 /// A motion designed for identification (`admittance excite`): a finite Fourier series per
-/// joint inside the position, velocity and acceleration limits of `m`, starting and ending
-/// at rest, optimised for the condition number of the base regressor. Returns a dict of
-/// `t` `(N,)` and `q`, `qdot`, `qddot` `(N, n)` arrays and `condition_number`.
+/// joint inside an envelope, starting and ending at rest, optimised for the condition number
+/// of the base regressor. The envelope: `range` (rad or m; a number, one per joint, or
+/// `float("inf")` for the URDF's whole range; default 0.5) around `pose` (default: the middle
+/// of the limits), `velocity_fraction` of the URDF's velocity limits and
+/// `acceleration_fraction` of `acceleration_limit` rad/s^2 (defaults 0.3, 0.3 and 3), inside
+/// the limits. Returns a dict of `t` `(N,)` and `q`, `qdot`, `qddot` `(N, n)` arrays and
+/// `condition_number`.
 #[pyfunction]
-#[pyo3(signature = (m, duration, seed=1, harmonics=5, period=None, rate_hz=200.0))]
+#[pyo3(signature = (m, duration, seed=1, harmonics=5, period=None, rate_hz=200.0, pose=None, range=None, velocity_fraction=None, acceleration_fraction=None, acceleration_limit=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn excitation<'py>(
     py: Python<'py>,
     m: &Bound<'py, PyModel>,
@@ -293,17 +377,31 @@ pub fn excitation<'py>(
     harmonics: usize,
     period: Option<f64>,
     rate_hz: f64,
+    pose: Option<Vec<f64>>,
+    range: Option<&Bound<'py, PyAny>>,
+    velocity_fraction: Option<f64>,
+    acceleration_fraction: Option<f64>,
+    acceleration_limit: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = m.get().model.clone();
     // Without a period: the duration in equal periods of at most 10 s (as the CLI).
     let period = period.unwrap_or_else(|| duration / (duration / 10.0).ceil().max(1.0));
+    let defaults = ExcitationSettings::default();
     let settings = ExcitationSettings {
         duration,
         period,
         harmonics,
         rate_hz,
         seed,
-        ..Default::default()
+        pose: pose.unwrap_or_default(),
+        range: match range.filter(|r| !r.is_none()) {
+            Some(r) => range_arg(r)?,
+            None => defaults.range.clone(),
+        },
+        velocity_fraction: velocity_fraction.unwrap_or(defaults.velocity_fraction),
+        acceleration_fraction: acceleration_fraction.unwrap_or(defaults.acceleration_fraction),
+        acceleration_limit: acceleration_limit.unwrap_or(defaults.acceleration_limit),
+        ..defaults
     };
     let e = py
         .detach(|| rust_excitation(&model, &settings))
@@ -318,4 +416,16 @@ pub fn excitation<'py>(
     }
     out.set_item("condition_number", e.condition_number)?;
     Ok(out)
+}
+
+/// `range=`: one number or a sequence of numbers.
+fn range_arg(r: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    if let Ok(v) = r.extract::<f64>() {
+        return Ok(vec![v]);
+    }
+    r.extract::<Vec<f64>>().map_err(|_| {
+        value_error(
+            "`range` must be a number or one number per joint (rad or m; inf: the whole range)",
+        )
+    })
 }

@@ -18,6 +18,7 @@ mod admittance;
 mod bag;
 mod closed_loop;
 mod config;
+mod contact;
 mod control;
 mod convert;
 mod free_motion;
@@ -25,6 +26,8 @@ mod identification;
 mod model;
 mod network;
 mod observers;
+mod payload;
+mod robot_loop;
 mod run;
 
 use pyo3::prelude::*;
@@ -35,6 +38,10 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The defaults every front end shares (declared once, in the learning crate).
     m.add("DEFAULT_NODES", admittance_learning::broad::DEFAULT_NODES)?;
+    m.add(
+        "DEFAULT_SIGNAL_CUTOFF_HZ",
+        admittance_loop::DEFAULT_SIGNAL_CUTOFF_HZ,
+    )?;
     m.add_class::<model::PyModel>()?;
     for f in [
         wrap_pyfunction!(model::rnea, m)?,
@@ -50,9 +57,12 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(identification::identify, m)?,
         wrap_pyfunction!(identification::load_identification, m)?,
         wrap_pyfunction!(identification::excitation, m)?,
+        wrap_pyfunction!(payload::identify_payload, m)?,
         wrap_pyfunction!(bag::import_bag, m)?,
         wrap_pyfunction!(closed_loop::write_run_folder, m)?,
         wrap_pyfunction!(closed_loop::check_out_dir, m)?,
+        wrap_pyfunction!(contact::calibrate_contact, m)?,
+        wrap_pyfunction!(contact::load_contact_floor, m)?,
     ] {
         m.add_function(f)?;
     }
@@ -66,11 +76,16 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<observers::PyHybridObserver>()?;
     m.add_class::<observers::PyOracleObserver>()?;
     m.add_class::<observers::PyInputConditioner>()?;
+    m.add_class::<observers::PyEstimateLowPass>()?;
     m.add_class::<admittance::PyAdmittance>()?;
+    m.add_class::<robot_loop::PyRobotLoop>()?;
+    m.add_class::<contact::PyContactFloor>()?;
+    m.add_class::<contact::PyContactDetector>()?;
     m.add_class::<closed_loop::PyClosedLoop>()?;
     m.add_class::<closed_loop::PyVariantRecorder>()?;
     m.add_class::<network::PyNetwork>()?;
     m.add_class::<identification::PyIdentification>()?;
+    m.add_class::<payload::PyPayload>()?;
     m.add("RunFailed", m.py().get_type::<run::RunFailed>())?;
     Ok(())
 }

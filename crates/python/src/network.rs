@@ -164,7 +164,8 @@ impl PyNetwork {
 /// `(N,)` arrays). `nodes`: Gaussian enhancement nodes. `friction_features`: add
 /// `tanh(qdot / v)` inputs (`friction_scales` v, default 0.01, 0.05, 0.2 rad/s).
 /// `input_filter_hz`: the observers' second input filter (0: the columns as recorded; the
-/// observer must then be fed through `InputConditioner` with the same cut-off).
+/// observer must then be fed through `InputConditioner` with the same cut-off); default the
+/// nominal identification's when it records one, else 0.
 /// The ridge parameter is chosen, and the validation NRMSE measured, on `validation`, a
 /// separate data set (a different excitation), when given; else by blocked
 /// cross-validation over `folds` contiguous stretches of `data` (each scored by a fit on
@@ -176,7 +177,7 @@ impl PyNetwork {
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 #[pyo3(signature = (data, m, nodes=admittance_learning::broad::DEFAULT_NODES, *, friction_features=false, friction_scales=None,
-    input_filter_hz=0.0, validation_fraction=None, validation=None, folds=5, seed=None,
+    input_filter_hz=None, validation_fraction=None, validation=None, folds=5, seed=None,
     width_scale=2.0, width_neighbours=8, nominal=None))]
 pub fn train(
     py: Python<'_>,
@@ -185,7 +186,7 @@ pub fn train(
     nodes: usize,
     friction_features: bool,
     friction_scales: Option<Vec<f64>>,
-    input_filter_hz: f64,
+    input_filter_hz: Option<f64>,
     validation_fraction: Option<f64>,
     validation: Option<&Bound<'_, PyAny>>,
     folds: usize,
@@ -208,6 +209,11 @@ pub fn train(
         (None, Some(f)) => Holdout::Fraction(check_fraction(f)?),
         (None, None) => Holdout::CrossValidation,
     };
+    if nodes == 0 {
+        return Err(value_error(
+            "`nodes` is 0, must be a positive integer (Gaussian enhancement nodes, e.g. 1000)",
+        ));
+    }
     if folds < 2 {
         return Err(value_error(format!(
             "`folds` is {folds}, must be >= 2 (contiguous stretches of the rows)"
@@ -230,6 +236,7 @@ pub fn train(
         }
         None => None,
     };
+    let input_filter_hz = nominal_filter_hz(input_filter_hz, nominal.as_deref())?;
     let train_arg = data_arg(data, "data", n, Some(&joints))?;
     let val_arg = validation
         .map(|v| data_arg(v, "validation", n, Some(&joints)))
@@ -244,10 +251,24 @@ pub fn train(
             k: width_neighbours,
             scale: width_scale,
         },
-        // A residual on a nominal model keeps the model alone where it does not pay.
+        // A residual on a nominal model keeps the model alone where it does not pay;
+        // without a recording of other motion nothing shows that it pays (issue 30).
         zero_unhelpful_outputs: nominal.is_some(),
+        zero_all_outputs: nominal.is_some() && validation.is_none(),
         ..defaults
     };
+    if config.zero_all_outputs {
+        let message = c"`nominal` without `validation`: cross-validation over one recording is \
+            not evidence that a residual pays on new motion, so every output is zero (the hybrid \
+            observer is the momentum observer on the nominal model); pass another recording as \
+            `validation=` to fit one";
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            message,
+            1,
+        )?;
+    }
     let options = TrainOptions {
         holdout,
         input_filter_hz,
@@ -293,6 +314,22 @@ pub fn train(
         }
         Ok(network)
     })
+}
+
+/// The conditioning of a residual: the identification's (`summary.input_filter_hz`, when it
+/// records one), which `given` must equal; else `given` or 0 (issue 30: settings travel).
+fn nominal_filter_hz(given: Option<f64>, nominal: Option<&Identification>) -> PyResult<f64> {
+    let recorded = nominal
+        .map(|i| i.summary.input_filter_hz)
+        .filter(|hz| *hz > 0.0);
+    match (given, recorded) {
+        (Some(g), Some(r)) if g.to_bits() != r.to_bits() => Err(value_error(format!(
+            "`input_filter_hz` is {g}, but `nominal` was fitted on signals conditioned at {r} Hz: \
+             leave it out (the identification's is used)"
+        ))),
+        (_, Some(r)) => Ok(r),
+        (g, None) => Ok(g.unwrap_or(0.0)),
+    }
 }
 
 /// Loads a network written by `Network.save` or `admittance train` (versioned,

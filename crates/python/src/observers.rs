@@ -1,18 +1,21 @@
 //! External-torque observers: `Observer` (the shared `update`), `MomentumObserver`,
 //! `LearnedObserver`, `HybridObserver`, `OracleObserver`; and `InputConditioner`, the
-//! observers' second input filter (`observer.input_filter_hz`).
+//! observers' second input filter (`observer.input_filter_hz`); `EstimateLowPass`, the
+//! estimate's low-pass (`observer.cutoff_hz`).
 
 use admittance_control::{
     HybridObserver, LearnedObserver, MomentumObserver, MomentumObserverConfig, Observer,
     ObserverInput, OracleObserver,
 };
-use admittance_loop::InputConditioner;
-use numpy::PyArray1;
+use admittance_loop::{EstimateLowPass, InputConditioner};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use crate::config;
 use crate::control::{stepped_pymethods, FaultRecord};
-use crate::convert::{config_error, read_vector, require_finite, value_error, vector, vector_out};
+use crate::convert::{
+    config_error, read_vector, require_finite, rows, value_error, vector, vector_out,
+};
 use crate::network::PyNetwork;
 
 pub(crate) enum AnyObserver {
@@ -354,5 +357,71 @@ impl PyInputConditioner {
     #[getter]
     fn n(&self) -> usize {
         self.n
+    }
+}
+
+/// The estimate's first-order low-pass of the loop (`observer.cutoff_hz`,
+/// `admittance_loop::EstimateLowPass`): `y += alpha (x - y)` per joint from rest, `alpha =
+/// dt / (dt + 1 / (2 pi cutoff_hz))` at `rate_hz`; 0 passes the estimate through.
+#[pyclass(module = "admittance._admittance", name = "EstimateLowPass")]
+pub struct PyEstimateLowPass {
+    inner: EstimateLowPass,
+    raw: Vec<f64>,
+}
+
+#[pymethods]
+impl PyEstimateLowPass {
+    #[new]
+    fn new(n: usize, cutoff_hz: f64, rate_hz: f64) -> PyResult<Self> {
+        if n == 0 {
+            return Err(value_error("EstimateLowPass: `n` must be at least 1"));
+        }
+        let inner = EstimateLowPass::new(n, cutoff_hz, rate_hz)
+            .map_err(|e| value_error(format!("EstimateLowPass: {e}")))?;
+        Ok(PyEstimateLowPass {
+            inner,
+            raw: vec![0.0; n],
+        })
+    }
+
+    /// One sample of the raw estimate `(n,)`; returns the filtered estimate, a new array.
+    fn update<'py>(
+        &mut self,
+        py: Python<'py>,
+        raw: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        read_vector(raw, "raw", &mut self.raw, JOINTS)?;
+        require_finite(&self.raw, "raw")?;
+        Ok(PyArray1::from_slice(py, self.inner.update(&self.raw)))
+    }
+
+    /// The rows of `raw` `(N, n)`, one sample each, in order (continuing from the filter's
+    /// state); returns the filtered `(N, n)`.
+    fn filter<'py>(
+        &mut self,
+        py: Python<'py>,
+        raw: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let n = self.inner.n();
+        let (values, count, _) = rows(raw, "raw", n, false)?;
+        require_finite(&values, "raw")?;
+        let mut out = vec![0.0; values.len()];
+        for (x, y) in values.chunks_exact(n).zip(out.chunks_exact_mut(n)) {
+            y.copy_from_slice(self.inner.update(x));
+        }
+        let a = numpy::ndarray::Array2::from_shape_vec((count, n), out)
+            .map_err(|e| value_error(format!("EstimateLowPass.filter: {e}")))?;
+        Ok(PyArray2::from_owned_array(py, a))
+    }
+
+    /// Back to rest (zero).
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// Number of joints.
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n()
     }
 }

@@ -37,7 +37,7 @@ def test_the_loop_is_the_controller_on_the_differentiated_angles(baxter):
     controller's on the backward difference of the angles, bit for bit."""
     n = baxter.n
     config = pd_config(n)
-    loop = adm.ClosedLoop(baxter, config)
+    loop = adm.ClosedLoop(baxter, config, sensor_cutoff_hz=0.0)
     ctl = adm.PdController(baxter, config["controller"]["pd"])
     zeros = np.zeros(n)
     q_prev = None

@@ -98,7 +98,7 @@ def test_free_motion_is_recorded_on_the_excitation():
     pd = pd_gains(m, q0)
     data = record_free_motion(arm, m, q0, pd, cfg, np.random.default_rng(5), 3.0)
     seed = int(np.random.default_rng(5).integers(1, 2**31 - 1))
-    e = adm.excitation(m, 3.0, seed=seed, rate_hz=1000.0)
+    e = adm.excitation(m, 3.0, seed=seed, rate_hz=1000.0, range=float("inf"), velocity_fraction=1.0, acceleration_fraction=1.0)
     assert data["q"].shape == (3000, m.n) and np.all(np.isfinite(data["tau"]))
     late = slice(1000, 3000)
     # The stiff joints follow it closely (the wrist's PD is soft: pd_gains ignores armature).

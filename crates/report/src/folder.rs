@@ -69,12 +69,13 @@ fn input(path: &Path, message: impl Into<String>) -> ReportError {
 
 /// Parses `summary.json` and checks its format marker and version.
 fn read_summary(path: &Path) -> Result<Value, ReportError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        input(
-            path,
-            format!("cannot read ({e}); is this a run folder? (`admittance run` writes it)"),
-        )
-    })?;
+    let text =
+        admittance_files::read_regular_text(path, admittance_files::TEXT_LIMIT).map_err(|e| {
+            input(
+                path,
+                format!("cannot read ({e}); is this a run folder? (`admittance run` writes it)"),
+            )
+        })?;
     let value: Value = serde_json::from_str(&text).map_err(|e| {
         input(
             path,
@@ -167,7 +168,11 @@ impl RunFolder {
             .get(summary::KEY_VARIANTS)
             .and_then(Value::as_object)
             .ok_or_else(|| input(&summary_path, "`variants` (an object) is missing"))?;
-        let scenario_text = std::fs::read_to_string(dir.join(files::SCENARIO)).ok();
+        let scenario_text = admittance_files::read_regular_text(
+            &dir.join(files::SCENARIO),
+            admittance_files::TEXT_LIMIT,
+        )
+        .ok();
         let scenario_toml = scenario_text
             .as_deref()
             .and_then(|t| t.parse::<toml::Table>().ok());

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use admittance_runfolder::{files, temp_sibling, write_atomic};
+use admittance_runfolder::{files, write_atomic};
 
 use crate::document::{self, Entry};
 use crate::experiment::Experiment;
@@ -104,9 +104,9 @@ fn write_figures(
     rendered: &[Result<Rendered, String>],
 ) -> Result<(), ReportError> {
     let fig_dir = dir.join(files::FIGURES);
-    let tmp_dir = temp_sibling(&fig_dir);
-    let _ = std::fs::remove_dir_all(&tmp_dir);
-    std::fs::create_dir_all(&tmp_dir).map_err(io(&tmp_dir))?;
+    // A new folder with an unpredictable name (mkdir fails on anything planted there), so
+    // that the figures are never written through a link.
+    let tmp_dir = admittance_files::temp_dir_beside(&fig_dir).map_err(io(&fig_dir))?;
     let write = || -> Result<(), ReportError> {
         for (p, r) in plans.iter().zip(rendered) {
             if let Ok(r) = r {
@@ -125,21 +125,20 @@ fn write_figures(
         let _ = std::fs::remove_dir_all(&old);
         Ok(())
     };
-    write().inspect_err(|_| {
+    let result = write().inspect_err(|_| {
         let _ = std::fs::remove_dir_all(&tmp_dir);
-    })
+    });
+    admittance_files::release(&tmp_dir);
+    result
 }
 
 /// Writes `recording.mcap`; returns its message count and the report's line about it.
 fn write_recording(dir: &Path, folder: &RunFolder) -> Result<(u64, String), ReportError> {
     let path = dir.join(files::RECORDING);
-    let tmp = temp_sibling(&path);
-    let file = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-    let n = recording::write(folder, std::io::BufWriter::new(file)).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        ReportError::Output(format!("{}: {e}", path.display()))
-    })?;
-    std::fs::rename(&tmp, &path).map_err(io(&path))?;
+    let n = admittance_files::write_atomic_with(&path, |w| {
+        recording::write(folder, w).map_err(std::io::Error::other)
+    })
+    .map_err(|e| ReportError::Output(format!("{}: {e}", path.display())))?;
     Ok((n, format!(
         "every variant's time series, topics `/VARIANT/joint_state`, `/reference`, `/torque`, `/external_torque` and more, JSON messages ({n} in all), log time = `t`."
     )))

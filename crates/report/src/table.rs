@@ -115,10 +115,11 @@ impl Table {
 
     /// Reads a CSV file, keeping the columns that pass `keep`.
     pub fn load_columns(path: &Path, keep: &dyn Fn(&str) -> bool) -> Result<Self, ReportError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ReportError::Input {
-            path: path.display().to_string(),
-            message: format!("cannot read: {e}"),
-        })?;
+        let text = admittance_files::read_regular_text(path, admittance_files::DATA_LIMIT)
+            .map_err(|e| ReportError::Input {
+                path: path.display().to_string(),
+                message: format!("cannot read: {e}"),
+            })?;
         Self::parse_columns(&text, &path.display().to_string(), keep)
     }
 }

@@ -1,6 +1,6 @@
-//! The bridge's logic without DDS: one `sensor_msgs/JointState` in, one step of the loop
-//! (the observer, the admittance model and the controller of a scenario variant, built as
-//! `adm_create` builds them), the estimate out as a `JointState` (effort: the external joint
+//! The bridge's logic without DDS: one `sensor_msgs/JointState` in, one step of the robot's
+//! loop (`admittance_loop::RobotLoop` of a deployment folder, the loop `adm_create` wraps:
+//! plausibility gates, signal chain, observer, admittance model, controller), the estimate out as a `JointState` (effort: the external joint
 //! torques, Franka's `external_joint_torques` convention) and a `WrenchStamped`.
 //!
 //! The same [`Bridge::process`] runs inside the DDS loop ([`crate::node`]) and offline
@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use admittance_bag::msgs::{Header, JointState, Vector3, Wrench, WrenchStamped};
 use admittance_bag::{Profile, JOINT_STATE, WRENCH_STAMPED};
-use admittance_ffi::{LoopSettings, RustLoop, StepInput, StepReport};
+use admittance_loop::{RobotInput, RobotLoop, RobotStatus};
 
 /// The axes of the published wrench.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -26,11 +26,10 @@ pub enum WrenchFrame {
 /// What a bridge is built from.
 #[derive(Clone, Debug)]
 pub struct BridgeConfig {
-    /// The scenario file (`[arm]`, `[observer]`, `[admittance]`, `[controller]`, the rate).
-    pub scenario: PathBuf,
-    /// The variant, if any.
-    pub variant: Option<String>,
-    /// `KEY=VALUE` overrides (the CLI's `--set`).
+    /// The deployment folder (`admittance deploy`: `loop.toml` with the arm, the rate, the
+    /// observer, ...; every file checked against its manifest).
+    pub deployment: PathBuf,
+    /// `KEY=VALUE` overrides of `loop.toml` (the CLI's `--set`).
     pub overrides: Vec<String>,
     /// Which topic and fields give `q`, `qdot`, `tau` (a bag profile).
     pub profile: Profile,
@@ -119,13 +118,13 @@ pub struct Stepped {
     pub stamp_ns: i64,
     /// The loop's time: seconds since the first stepped message's stamp.
     pub time: f64,
-    /// The loop's flags and fault.
-    pub report: StepReport,
+    /// The loop's status (faults, implausible samples, contact).
+    pub status: RobotStatus,
 }
 
 /// The bridge: a loop and the mapping of one JointState topic onto it.
 pub struct Bridge {
-    rust_loop: RustLoop,
+    rust_loop: RobotLoop,
     map: InputMap,
     /// The names the messages use, in chain order.
     names: Vec<String>,
@@ -144,16 +143,14 @@ pub struct Bridge {
 }
 
 impl Bridge {
-    /// Builds the loop from the scenario (errors name the file, line and key) and checks the
-    /// profile against it.
+    /// Builds the loop from the deployment folder (errors name the file and key; nothing is
+    /// trained) and checks the profile against it.
     pub fn new(config: &BridgeConfig) -> Result<Self, String> {
         let map = InputMap::from_profile(&config.profile)?;
-        let rust_loop = RustLoop::new(&LoopSettings {
-            scenario: &config.scenario,
-            variant: config.variant.as_deref(),
-            overrides: config.overrides.iter().map(String::as_str).collect(),
-            wrench_damping: Some(0.0),
-        })?;
+        let overrides: Vec<&str> = config.overrides.iter().map(String::as_str).collect();
+        let dir = &config.deployment;
+        let mut rust_loop = RobotLoop::load(dir, &overrides).map_err(|e| e.text())?;
+        rust_loop.enable_wrench(0.0).map_err(|e| e.text())?;
         let n = rust_loop.dof();
         let names: Vec<String> = match (&config.joints, &config.profile.joints) {
             (Some(j), _) => j.clone(),
@@ -165,7 +162,7 @@ impl Bridge {
                 "{} joint names given ({}) for the {n} joints of {}'s [arm] chain ({})",
                 names.len(),
                 names.join(", "),
-                config.scenario.display(),
+                config.deployment.display(),
                 rust_loop.joints().join(", ")
             ));
         }
@@ -214,7 +211,7 @@ impl Bridge {
     }
 
     /// The loop (its estimate, reference, wrench of the last step).
-    pub fn rust_loop(&self) -> &RustLoop {
+    pub fn rust_loop(&self) -> &RobotLoop {
         &self.rust_loop
     }
 
@@ -349,7 +346,7 @@ impl Bridge {
         let first = *self.first_stamp.get_or_insert(stamp);
         self.last_stamp = Some(stamp);
         let time = (stamp - first) as f64 * 1e-9;
-        let report = self.rust_loop.step(&StepInput {
+        let status = self.rust_loop.step(&RobotInput {
             time,
             q: &self.q,
             qdot: self.map.qdot_field.is_some().then_some(&self.qdot[..]),
@@ -359,7 +356,7 @@ impl Bridge {
         Ok(Stepped {
             stamp_ns: stamp,
             time,
-            report,
+            status,
         })
     }
 

@@ -24,7 +24,7 @@ pub struct Ros2Args {
 /// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Ros2Command {
-    /// Subscribe to the robot's JointState topic, step the scenario's observer on each
+    /// Subscribe to the robot's JointState topic, step the deployed loop's observer on each
     /// message and publish the external joint torques (JointState effort) and the hand
     /// wrench (WrenchStamped).
     Bridge(BridgeArgs),
@@ -52,12 +52,10 @@ pub struct NetArgs {
 /// `admittance ros2 bridge`.
 #[derive(Args, Debug)]
 pub struct BridgeArgs {
-    /// The scenario file giving the arm, observer, admittance model and control rate.
-    pub scenario: PathBuf,
-    /// The scenario variant.
-    #[arg(long)]
-    pub variant: Option<String>,
-    /// Override a scenario key (`KEY=VALUE`, as `admittance run --set`); repeatable.
+    /// The deployment folder (`admittance deploy SCENARIO --out DIR`): the arm, observer,
+    /// admittance model and control rate; nothing is trained here.
+    pub deployment: PathBuf,
+    /// Override a key of the folder's loop.toml (`KEY=VALUE`); repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
     /// Which topic and fields give q, qdot, tau: franka, ur, lbr, or a profile TOML file.
@@ -236,8 +234,7 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
     let run_for = a.duration.map(|s| duration("--duration", s)).transpose()?;
     let profile = Profile::resolve(&a.profile).map_err(|e| input(e.to_string()))?;
     let config = BridgeConfig {
-        scenario: a.scenario.clone(),
-        variant: a.variant.clone(),
+        deployment: a.deployment.clone(),
         overrides: a.overrides.clone(),
         profile,
         joints: a.joints.clone(),
@@ -284,7 +281,7 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
         && (stats.stamp_rate_hz - stats.loop_rate_hz).abs() > 0.05 * stats.loop_rate_hz
     {
         eprintln!(
-            "admittance ros2 bridge: warning: the messages came at {:.1} Hz but the loop runs at {:.1} Hz: set the scenario's rate with --set plant.control_rate_hz={:.0}",
+            "admittance ros2 bridge: warning: the messages came at {:.1} Hz but the loop runs at {:.1} Hz: set the loop's rate with --set control_rate_hz={:.0}",
             stats.stamp_rate_hz, stats.loop_rate_hz, stats.stamp_rate_hz
         );
     }

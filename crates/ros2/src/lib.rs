@@ -1,7 +1,8 @@
 //! ROS 2 without ROS (issue 24, part 3): `admittance ros2 bridge` subscribes to a robot's
 //! `sensor_msgs/JointState` topic (best-effort; which fields give q, qdot, tau comes from
-//! the bag profiles of `admittance import`), steps the 1 kHz loop of a scenario variant on
-//! each message (the loop `adm_create` builds: observer -> admittance model -> controller)
+//! the bag profiles of `admittance import`), steps the robot's loop of a deployment folder
+//! (`admittance deploy`; `admittance_loop::RobotLoop`, the loop `adm_create` wraps) on each
+//! message
 //! and publishes, reliably, the estimated external joint torques (a JointState whose
 //! `effort` is the estimate: Franka's `external_joint_torques` convention) and the hand
 //! wrench (`geometry_msgs/WrenchStamped`, `frame_id` naming its axes).

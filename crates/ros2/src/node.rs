@@ -328,9 +328,14 @@ pub struct FakeArmReport {
     pub answers: Vec<Answer>,
 }
 
+/// The fake arm's mean pose (rad), by joint rank: within the limits of a Panda or FR3.
+const FAKE_POSE: [f64; 7] = [-0.4, -0.2, 0.0, -2.0, 0.4, 1.5, 0.8];
+
 /// Message `k` of the fake arm: smooth motion of every joint (exact velocities) and
 /// torques, stamped `t0_ns + k * period_ns`; names in `joints`' order, each joint's values
-/// a function of its name's rank in sorted order.
+/// a function of its name's rank in sorted order. The angles swing by 0.3 rad around a
+/// pose inside a Franka arm's joint limits (the bridge's plausibility gates refuse angles
+/// beyond them).
 pub fn fake_sample(k: u64, joints: &[String], t0_ns: i64, period_ns: i64) -> JointState {
     let stamp = t0_ns + k as i64 * period_ns;
     let t = k as f64 * period_ns as f64 * 1e-9;
@@ -352,7 +357,8 @@ pub fn fake_sample(k: u64, joints: &[String], t0_ns: i64, period_ns: i64) -> Joi
     for name in joints {
         let f = sorted.iter().position(|s| *s == name).unwrap_or(0) as f64;
         let w = std::f64::consts::TAU / (3.0 + f);
-        m.position.push(0.2 * f - 0.4 + 0.3 * (w * t).sin());
+        m.position
+            .push(FAKE_POSE[f as usize % FAKE_POSE.len()] + 0.3 * (w * t).sin());
         m.velocity.push(0.3 * w * (w * t).cos());
         m.effort
             .push(1.5 * (1.0 + f) * (0.7 * t + f).sin() + 0.2 * f);

@@ -2,16 +2,22 @@
 //! field and joint named, nothing stepped), profiles it cannot subscribe to, and the
 //! estimate equal to the loop of `adm_create` stepped directly.
 
+mod common;
+
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use admittance_bag::msgs::JointState;
 use admittance_bag::Profile;
-use admittance_ffi::{LoopSettings, RustLoop, StepInput};
+use admittance_loop::{RobotInput, RobotLoop};
 use admittance_ros2::node::fake_sample;
 use admittance_ros2::{offline, Bridge, BridgeConfig, WrenchFrame};
 
-fn scenario() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/panda_admittance.toml")
+/// The deployment folder, written once for the whole test binary.
+fn deployment() -> PathBuf {
+    static DIR: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    let (_, dir) = DIR.get_or_init(common::deploy);
+    Path::new(dir).to_path_buf()
 }
 
 fn chain() -> Vec<String> {
@@ -20,8 +26,7 @@ fn chain() -> Vec<String> {
 
 fn config(profile: &str) -> BridgeConfig {
     BridgeConfig {
-        scenario: scenario(),
-        variant: Some("momentum".into()),
+        deployment: deployment(),
         overrides: Vec::new(),
         profile: Profile::resolve(profile).unwrap(),
         joints: None,
@@ -44,17 +49,11 @@ fn estimate_equals_the_loop_stepped_directly_and_names_map_in_any_order() {
     let by_bridge = offline(&config("franka"), &messages(n, &reversed)).unwrap();
 
     // The loop adm_create builds, stepped with the chain-order arrays.
-    let mut direct = RustLoop::new(&LoopSettings {
-        scenario: &scenario(),
-        variant: Some("momentum"),
-        overrides: Vec::new(),
-        wrench_damping: Some(0.0),
-    })
-    .unwrap();
+    let mut direct = RobotLoop::load(&deployment(), &[]).unwrap();
     let mut nonzero = 0;
     for (k, r) in by_bridge.iter().enumerate() {
         let m = fake_sample(k as u64, &chain(), T0, MS);
-        direct.step(&StepInput {
+        direct.step(&RobotInput {
             time: (k as i64 * MS) as f64 * 1e-9,
             q: &m.position,
             qdot: Some(&m.velocity),
@@ -209,7 +208,7 @@ fn profiles_and_joint_lists_it_cannot_use_are_named() {
         bridge.rust_loop().external_torque_estimate(),
         reference.rust_loop().external_torque_estimate()
     );
-    // A joint list of the wrong length, and a scenario error naming its file.
+    // A joint list of the wrong length, and a loop.toml error naming its key.
     let mut c = config("franka");
     c.joints = Some(vec!["a".into(), "b".into()]);
     let e = Bridge::new(&c).err().unwrap();

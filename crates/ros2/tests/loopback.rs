@@ -1,10 +1,12 @@
 //! Two processes over loopback DDS (no ROS installed): `admittance-ros2 fake-arm` publishes
 //! JointState messages at 1 kHz for 10 s after discovery, `admittance-ros2 bridge` steps
-//! the Panda scenario's momentum observer on each and publishes the estimate. Every answer
+//! the Panda deployment's momentum observer on each and publishes the estimate. Every answer
 //! the fake arm received must equal, bit for bit, the same bridge run offline over the
 //! messages the bridge stepped; the delivered share and the latencies are printed (run
 //! with `--nocapture`) for docs/ros2.md. Timing is not asserted beyond a loose delivery
 //! bound: the machine is shared.
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -48,7 +50,8 @@ impl Drop for Guard {
 fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
     let exe = env!("CARGO_BIN_EXE_admittance-ros2");
     let dir = tempfile::tempdir().unwrap();
-    let scenario = root().join("scenarios/panda_admittance.toml");
+    let deployment = dir.path().join("deploy");
+    common::deploy_into(&deployment);
     // A domain of its own, so that a concurrent run on this machine is not mixed in.
     let domain = (100 + std::process::id() % 100).to_string();
     let stats_path = dir.path().join("stats.json");
@@ -57,8 +60,8 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
 
     let bridge = Command::new(exe)
         .args(["bridge"])
-        .arg(&scenario)
-        .args(["--variant", "momentum", "--profile", "franka", "--stats"])
+        .arg(&deployment)
+        .args(["--profile", "franka", "--stats"])
         .arg(&stats_path)
         .args(net)
         .stdout(Stdio::null())
@@ -147,8 +150,7 @@ fn fake_arm_and_bridge_over_loopback_agree_with_the_offline_run() {
         })
         .collect();
     let config = BridgeConfig {
-        scenario,
-        variant: Some("momentum".into()),
+        deployment,
         overrides: Vec::new(),
         profile: Profile::resolve("franka").unwrap(),
         joints: None,

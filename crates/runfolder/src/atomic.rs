@@ -1,5 +1,4 @@
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::{Mutex, MutexGuard};
 
 static COMMIT: Mutex<()> = Mutex::new(());
@@ -14,27 +13,10 @@ pub fn commit_guard() -> MutexGuard<'static, ()> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// A hidden temporary sibling of `path` for this process: `.NAME.tmp-PID`.
-pub fn temp_sibling(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
-}
-
-/// Writes `bytes` to `path` through a temporary sibling, flushed to disk, and a rename, so
-/// that `path` holds either its old content or the new one, never a part.
+/// Writes `bytes` to `path` atomically and exclusively (`admittance_files::write_atomic`: a
+/// temporary file with an unpredictable name beside it, created with `O_EXCL` and
+/// `O_NOFOLLOW`, flushed to disk and renamed), so that `path` holds either its old content or
+/// the new one, never a part, and a link planted beside it or at it is never written through.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = temp_sibling(path);
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    admittance_files::write_atomic(path, bytes)
 }

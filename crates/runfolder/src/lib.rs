@@ -12,7 +12,8 @@
 //!   `summary.json`;
 //! * [`settings`]: `settings.json`, every variant's settings as the run applied them (the
 //!   deadzone, environment windows, evaluation window, saturation bounds, kinds);
-//! * [`write_atomic`]: files are written through a temporary sibling and a rename;
+//! * [`write_atomic`]: files are written through an exclusively created temporary sibling
+//!   with an unpredictable name and a rename (`admittance_files`);
 //!   [`writer`]: a whole run folder through a hidden partial sibling and a rename, and its
 //!   CSV time series.
 //!
@@ -30,4 +31,4 @@ pub mod writer;
 
 mod atomic;
 
-pub use atomic::{commit_guard, temp_sibling, write_atomic};
+pub use atomic::{commit_guard, write_atomic};

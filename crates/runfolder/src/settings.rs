@@ -213,7 +213,7 @@ impl RunSettings {
     /// existed), an error naming the problem when it is unreadable or malformed.
     pub fn read(dir: &Path) -> Result<Option<Self>, String> {
         let path = dir.join(FILE);
-        match std::fs::read_to_string(&path) {
+        match admittance_files::read_regular_text(&path, admittance_files::TEXT_LIMIT) {
             Ok(text) => Self::parse(&text).map(Some),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(format!("cannot read ({e})")),

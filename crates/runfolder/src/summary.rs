@@ -101,7 +101,7 @@ pub fn is_run_folder(dir: &Path) -> bool {
     if !meta.is_file() || meta.len() > 64 << 20 {
         return false;
     }
-    std::fs::read(&path)
+    admittance_files::read_regular(&path, admittance_files::TEXT_LIMIT)
         .ok()
         .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
         .is_some_and(|v| has_marker(&v))

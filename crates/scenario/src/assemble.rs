@@ -92,7 +92,7 @@ pub(crate) fn assemble(
     }
     let sim_err = |e: SimError| ctx.err("plant", e.to_string(), None);
     let plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
-    let gain_warnings = gain_warning_lines(&ctx, &scenario, &model, &trajectory);
+    let mut gain_warnings = gain_warning_lines(&ctx, &scenario, &model, &trajectory);
     let sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
         .map_err(sim_err)?;
     let mut loop_config = scenario.loop_config_for(path);
@@ -100,6 +100,7 @@ pub(crate) fn assemble(
         .compliance(&model)
         .map_err(|e| loop_err(&ctx, e))?;
     let identified = identified_nominal_of(&ctx, &scenario, &model, path, options, simulate)?;
+    gain_warnings.extend(filter_warning(&ctx, &scenario, identified.as_ref()));
     if let Some(nominal) = &identified {
         loop_config.observer.identification = Some(nominal.path.clone());
     }
@@ -148,7 +149,7 @@ pub(crate) fn assemble(
 /// The identification the momentum and hybrid observers run on: fitted on the training
 /// data (`[observer.training] identify = true`), or the file `observer.identification`
 /// names; `None` when they run on the URDF or the observer is another kind.
-fn identified_nominal_of(
+pub(crate) fn identified_nominal_of(
     ctx: &Ctx<'_>,
     scenario: &Scenario,
     model: &Model,
@@ -167,8 +168,8 @@ fn identified_nominal_of(
         return Ok(None);
     };
     let key_err = |m: String| ctx.err("observer.identification", m, None);
-    let bytes =
-        std::fs::read(file).map_err(|e| key_err(format!("cannot read {}: {e}", file.display())))?;
+    let bytes = admittance_files::read_regular(file, admittance_files::TEXT_LIMIT)
+        .map_err(|e| key_err(format!("cannot read {}: {e}", file.display())))?;
     let identification = admittance_dynamics::Identification::load(file, model)
         .map_err(|e| key_err(e.to_string()))?;
     Ok(Some(IdentifiedNominal {
@@ -177,6 +178,46 @@ fn identified_nominal_of(
         checksum: admittance_learning::broad::fnv1a64(&bytes),
         cached: true,
     }))
+}
+
+/// A warning when the identification file given was fitted on signals conditioned otherwise
+/// than the observer's `input_filter_hz` feeds it (issue 30: settings travel with the
+/// files): its summary's cut-off, else the one `admittance identify` recorded.
+fn filter_warning(
+    ctx: &Ctx<'_>,
+    scenario: &Scenario,
+    identified: Option<&IdentifiedNominal>,
+) -> Option<String> {
+    let nominal = identified.filter(|_| {
+        !scenario
+            .observer
+            .training
+            .as_ref()
+            .is_some_and(|t| t.identify)
+    })?;
+    let summary_hz = nominal.identification.summary.input_filter_hz;
+    let recorded = if summary_hz > 0.0 {
+        summary_hz
+    } else {
+        let bytes = std::fs::read(&nominal.path).ok()?;
+        serde_json::from_slice::<serde_json::Value>(&bytes)
+            .ok()?
+            .pointer("/payload/data/input_filter_hz")?
+            .as_f64()?
+    };
+    let used = scenario.observer.input_filter_hz;
+    (recorded.to_bits() != used.to_bits()).then(|| {
+        ctx.err(
+            "observer.input_filter_hz",
+            format!(
+                "is {used} Hz, but {} was fitted on signals conditioned at {recorded} Hz: the \
+                 observer runs the identification on other signals than it was fitted on",
+                nominal.path.display()
+            ),
+            Some(&format!("set observer.input_filter_hz = {recorded}")),
+        )
+        .to_string()
+    })
 }
 
 /// The gain rules' warnings of a resolved, valid scenario (`Scenario::gain_warnings`) over
@@ -253,7 +294,7 @@ fn loop_err(ctx: &Ctx<'_>, e: LoopError) -> ScenarioError {
 /// The network of a learned observer (docs/method.md section 5), trained or loaded from the
 /// cache for `learned` and `hybrid`; `None` for the other kinds.
 #[allow(clippy::too_many_arguments)]
-fn trained_network(
+pub(crate) fn trained_network(
     ctx: &Ctx<'_>,
     scenario: &Scenario,
     model: &Model,

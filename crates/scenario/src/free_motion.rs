@@ -198,10 +198,11 @@ impl FreeMotionData {
 
     fn load_impl(path: &Path, joints: Option<&[&str]>) -> Result<Self, FreeMotionError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| FreeMotionError::Io {
-            source_name: name.clone(),
-            message: e.to_string(),
-        })?;
+        let text = admittance_files::read_regular_text(path, admittance_files::DATA_LIMIT)
+            .map_err(|e| FreeMotionError::Io {
+                source_name: name.clone(),
+                message: e.to_string(),
+            })?;
         Self::parse_impl(&text, &name, joints)
     }
 

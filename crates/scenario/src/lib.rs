@@ -31,10 +31,12 @@
 
 mod assemble;
 mod budget;
+mod contact;
 mod context;
 mod error;
 mod external;
 mod free_motion;
+mod identify_recording;
 mod gather;
 mod hand;
 mod hand_paths;
@@ -55,13 +57,21 @@ mod trajectory;
 
 pub use admittance_loop::Divergence;
 pub use assemble::gain_warnings;
+pub use contact::{
+    calibrate_contact_on, count_false_alarms, detect, momentum_estimates, FalseAlarms,
+    FreeMotionEstimates, CONTACT_WARM_UP_S,
+};
 pub use error::{Invalid, ScenarioError};
 pub use external::{Desired, ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
+pub use identify_recording::{
+    conditioning_step_response_s, identify_recording, sample_rate_hz, ConditionedSamples,
+    CutoffTrial, CUTOFF_CANDIDATES_HZ,
+};
 pub use limits::Limits;
 pub use metrics::{DynamicNodeMetrics, HandMetrics, ObserverTrainingMetrics, VariantMetrics};
 pub use progress::{Progress, ProgressFn, RunOptions, Stage};
-pub use robot::{robot_loop, RobotLoop};
+pub use robot::{deployable, Deployable};
 pub use run_folder::{
     check_out_dir, remove_stale_partials, run_scenario, run_scenario_variants,
     write_external_run_folder, write_series_csv, RunError, RunSummary, STOPPING_RULES,

@@ -38,6 +38,9 @@ pub struct RunOptions {
     pub progress: Option<ProgressFn>,
     /// Refusal limits checked before a run starts (docs/outputs.md, "Limits").
     pub limits: crate::limits::Limits,
+    /// Never train or identify: a network or identification not in the training cache is
+    /// an error naming the command that makes it (`admittance deploy`).
+    pub cache_only: bool,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -46,6 +49,7 @@ impl std::fmt::Debug for RunOptions {
             .field("seed", &self.seed)
             .field("progress", &self.progress.is_some())
             .field("limits", &self.limits)
+            .field("cache_only", &self.cache_only)
             .finish()
     }
 }

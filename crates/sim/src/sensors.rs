@@ -57,7 +57,7 @@ impl Default for SensorConfig {
             counts_per_rev: 0.0,
             noise_std: 0.0,
             seed: 0,
-            filter_cutoff_hz: 20.0,
+            filter_cutoff_hz: admittance_loop::DEFAULT_SIGNAL_CUTOFF_HZ,
             faults: Vec::new(),
         }
     }

@@ -10,6 +10,20 @@ use crate::profile::WRENCH_STAMPED;
 impl Collector<'_> {
     /// Puts every signal in joint order, applies the torque constants, checks the stamps.
     pub fn finish(mut self) -> Result<Extracted, BagError> {
+        let mut notes = Vec::new();
+        // The label is optional (training does not use it): absent, it is a note.
+        let absent = |s: &SignalState| !self.topics.contains_key(&s.source.topic);
+        if let Some(i) = self
+            .signals
+            .iter()
+            .position(|s| s.role == "label" && absent(s))
+        {
+            let s = self.signals.remove(i);
+            notes.push(format!(
+                "label topic `{}` is not in the bag: the CSV has no label.* columns (the label is optional; training does not use it)",
+                s.source.topic
+            ));
+        }
         for s in &self.signals {
             if !self.topics.contains_key(&s.source.topic) {
                 return Err(BagError::MissingTopic {
@@ -37,6 +51,7 @@ impl Collector<'_> {
             series,
             topics: self.topics.into_values().collect(),
             skips: self.skips.into_values().collect(),
+            notes,
         })
     }
 

@@ -138,3 +138,83 @@ pub fn js_profile(with_qdot: bool) -> admittance_bag::Profile {
     );
     admittance_bag::Profile::parse(&text, "test.toml").unwrap()
 }
+
+/// A message read back: topic, type, schema text, log time, payload.
+pub type ReadMessage = (String, String, Vec<u8>, u64, Vec<u8>);
+
+/// The messages of an MCAP file (read with the `mcap` crate).
+pub fn messages_of(path: &Path) -> Vec<ReadMessage> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let schema = m.channel.schema.as_ref().unwrap();
+            (
+                m.channel.topic.clone(),
+                schema.name.clone(),
+                schema.data.to_vec(),
+                m.log_time,
+                m.data.to_vec(),
+            )
+        })
+        .collect()
+}
+
+/// Rewrites the messages of `src` for which `keep(topic)` holds into `dst`, in zstd chunks
+/// of about `chunk_size` bytes with chunk CRCs (the `mcap` crate's writer).
+pub fn rewrite_zstd(src: &Path, dst: &Path, chunk_size: u64, keep: impl Fn(&str) -> bool) {
+    let file = std::io::BufWriter::new(std::fs::File::create(dst).unwrap());
+    let options = mcap::WriteOptions::new()
+        .compression(Some(mcap::Compression::Zstd))
+        .chunk_size(Some(chunk_size))
+        .profile("ros2");
+    let mut w = mcap::Writer::with_options(file, options).unwrap();
+    let mut channels: BTreeMap<String, u16> = BTreeMap::new();
+    for (seq, (topic, type_name, schema, log, data)) in messages_of(src).into_iter().enumerate() {
+        if !keep(&topic) {
+            continue;
+        }
+        let id = match channels.get(&topic) {
+            Some(id) => *id,
+            None => {
+                let s = w.add_schema(&type_name, "ros2msg", &schema).unwrap();
+                let id = w.add_channel(s, &topic, "cdr", &BTreeMap::new()).unwrap();
+                channels.insert(topic.clone(), id);
+                id
+            }
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: seq as u32,
+            log_time: log,
+            publish_time: log,
+        };
+        w.write_to_known_channel(&header, &data).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// Byte offsets of the Chunk records (opcode 0x06) of an MCAP file's data section.
+pub fn chunk_offsets(bytes: &[u8]) -> Vec<usize> {
+    let mut at = 8;
+    let mut out = Vec::new();
+    while at + 9 <= bytes.len() {
+        let op = bytes[at];
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if op == 0x0f {
+            break;
+        }
+        if op == 0x06 {
+            out.push(at);
+        }
+        at += 9 + len;
+    }
+    out
+}
+
+/// The offset of a chunk's `uncompressed_size` field (after opcode, length, start and end
+/// times).
+pub fn uncompressed_size_field(chunk: usize) -> usize {
+    chunk + 9 + 16
+}

@@ -137,6 +137,7 @@ pub fn learn_error(e: BroadError) -> CliError {
         BroadError::Config(_) | BroadError::Destination { .. } => CliError::usage(message),
         BroadError::Dimension { .. }
         | BroadError::Empty { .. }
+        | BroadError::NoMotion { .. }
         | BroadError::NonFinite { .. }
         | BroadError::OutOfRange { .. }
         | BroadError::GrowthDataMismatch(_)

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use admittance_dynamics::{Identification, Model};
-use admittance_learning::broad::{fnv1a64, BroadError, Dataset};
+use admittance_learning::broad::{BroadError, Dataset};
 use admittance_scenario::{FreeMotionData, FreeMotionError};
 
 use super::args::learn_error;
@@ -14,7 +14,7 @@ use crate::CliError;
 /// The joints named by the `q.*` columns of the file's header (for messages).
 fn file_joints(path: &Path) -> Option<Vec<String>> {
     use std::io::BufRead;
-    let file = std::fs::File::open(path).ok()?;
+    let file = admittance_files::open_regular(path, u64::MAX).ok()?;
     let header = std::io::BufReader::new(file)
         .lines()
         .map_while(Result::ok)
@@ -95,15 +95,6 @@ pub fn arrays(
             .map_err(|e| CliError::input(format!("nominal model: {e}")))?;
     }
     Ok((x, y))
-}
-
-/// An identification file (`admittance identify`) of `arm` and the FNV-1a 64 checksum
-/// of its bytes (recorded in the model file as the target's identity).
-pub fn identification(path: &Path, arm: &Model) -> Result<(Identification, u64), CliError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))?;
-    let ident = Identification::load(path, arm).map_err(|e| CliError::input(e.to_string()))?;
-    Ok((ident, fnv1a64(&bytes)))
 }
 
 /// Replaces the targets `y` by what the identified model does not explain,

@@ -91,6 +91,13 @@ fn identify_on_an_excitation_recovers_a_perturbed_baxter() {
         "30",
         "--rate",
         "100",
+        // A simulated arm: the URDF's whole limits (the default envelope is for real arms).
+        "--range",
+        "full",
+        "--velocity-fraction",
+        "1",
+        "--acceleration-fraction",
+        "1",
         "--out",
         csv.to_str().unwrap(),
     ]);
@@ -167,6 +174,9 @@ fn identify_on_an_excitation_recovers_a_perturbed_baxter() {
             duration: 10.0,
             rate_hz: 100.0,
             iterations: 0,
+            range: vec![f64::INFINITY],
+            velocity_fraction: 1.0,
+            acceleration_fraction: 1.0,
             ..Default::default()
         },
     )
@@ -261,6 +271,21 @@ fn out_is_only_a_new_name_or_an_excitation_and_flags_are_named() {
             "--position-margin",
         ),
         (vec!["--duration", "-3"], "--duration"),
+        (vec!["--duration", "10", "--range", "-0.5"], "--range"),
+        (vec!["--duration", "10", "--range", "0.5,0.5"], "--range"),
+        (vec!["--duration", "10", "--pose", "0,0,0"], "--pose"),
+        (
+            vec!["--duration", "10", "--pose", "0,0,0,9,0,0,0"],
+            "--pose",
+        ),
+        (
+            vec!["--duration", "10", "--velocity-fraction", "1.5"],
+            "--velocity-fraction",
+        ),
+        (
+            vec!["--duration", "10", "--acceleration-fraction", "0"],
+            "--acceleration-fraction",
+        ),
     ] {
         let mut args = vec!["excite", "--urdf", urdf, "--out", out.to_str().unwrap()];
         args.extend(flags);

@@ -163,3 +163,163 @@ fn exit_codes_and_messages() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(!csv.exists());
 }
+
+/// The shipped zstd bag with its first chunk's `uncompressed_size` plus one (issue 34: it
+/// hung the import for ever).
+fn bag_with_wrong_chunk_size(dir: &Path) -> PathBuf {
+    let mut bytes =
+        std::fs::read(root().join("crates/bag/tests/data/franka_zstd/franka_zstd.mcap")).unwrap();
+    let mut at = 8;
+    while bytes[at] != 0x06 {
+        at += 9 + u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+    }
+    let field = at + 9 + 16;
+    let size = u64::from_le_bytes(bytes[field..field + 8].try_into().unwrap());
+    bytes[field..field + 8].copy_from_slice(&(size + 1).to_le_bytes());
+    let path = dir.join("wrong_size.mcap");
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// The shipped bag's messages on `keep` topics, rewritten (the `mcap` crate's writer).
+fn filtered_bag(dir: &Path, name: &str, keep: impl Fn(&str) -> bool) -> PathBuf {
+    use std::collections::BTreeMap;
+    let bytes =
+        std::fs::read(root().join("crates/bag/tests/data/franka_zstd/franka_zstd.mcap")).unwrap();
+    let path = dir.join(name);
+    let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+    let mut w = mcap::Writer::new(file).unwrap();
+    let mut ids: BTreeMap<String, u16> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if !keep(&m.channel.topic) {
+            continue;
+        }
+        let id = match ids.get(&m.channel.topic) {
+            Some(id) => *id,
+            None => {
+                let s = m.channel.schema.as_ref().unwrap();
+                let sid = w.add_schema(&s.name, &s.encoding, &s.data).unwrap();
+                let id = w
+                    .add_channel(sid, &m.channel.topic, "cdr", &BTreeMap::new())
+                    .unwrap();
+                ids.insert(m.channel.topic.clone(), id);
+                id
+            }
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: m.sequence,
+            log_time: m.log_time,
+            publish_time: m.publish_time,
+        };
+        w.write_to_known_channel(&header, &m.data).unwrap();
+    }
+    w.finish().unwrap();
+    path
+}
+
+#[test]
+fn damaged_chunks_budgets_and_special_files_exit_3_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("x.csv");
+    let wrong = bag_with_wrong_chunk_size(dir.path());
+    for accept in [false, true] {
+        let mut args = vec!["import", s(&wrong), "--profile", "franka", "--out", s(&csv)];
+        if accept {
+            args.push("--accept-damaged");
+        }
+        let (code, _, err) = admittance(&args);
+        assert_eq!(code, 3, "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("wrong_size.mcap") && err.contains("chunk 1"),
+            "{err}"
+        );
+        assert!(err.contains("at byte 43"), "{err}");
+    }
+    let (code, _, err) = admittance(&[
+        "import",
+        &bag("franka_zstd"),
+        "--profile",
+        "franka",
+        "--out",
+        s(&csv),
+        "--rate",
+        "5e7",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("memory budget") && err.contains("--rate"),
+        "{err}"
+    );
+    #[cfg(unix)]
+    {
+        let fifo = dir.path().join("pipe.mcap");
+        assert!(std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success());
+        let (code, _, err) =
+            admittance(&["import", s(&fifo), "--profile", "franka", "--out", s(&csv)]);
+        assert_eq!(code, 3, "{err}");
+        assert!(err.contains("FIFO"), "{err}");
+    }
+    assert!(!csv.exists());
+}
+
+#[test]
+fn joint_states_without_the_label_import_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let only = filtered_bag(dir.path(), "only_q.mcap", |t| {
+        t.ends_with("measured_joint_states")
+    });
+    let csv = dir.path().join("only.csv");
+    let (code, out, err) =
+        admittance(&["import", s(&only), "--profile", "franka", "--out", s(&csv)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("note: label topic `/franka_robot_state_broadcaster/external_joint_torques` is not in the bag"), "{out}");
+    let data = FreeMotionData::load(&csv).unwrap();
+    assert_eq!(data.dof(), 7);
+    let header = std::fs::read_to_string(&csv).unwrap();
+    assert!(!header.lines().next().unwrap().contains("label."));
+    // The label without the joint states: q is missing, an error.
+    let label = filtered_bag(dir.path(), "label.mcap", |t| {
+        t.ends_with("external_joint_torques")
+    });
+    let (code, _, err) =
+        admittance(&["import", s(&label), "--profile", "franka", "--out", s(&csv)]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("(for q) is not in the bag"), "{err}");
+}
+
+#[test]
+fn a_low_output_rate_is_refused_unless_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("low.csv");
+    let args = [
+        "import",
+        &bag("franka_zstd"),
+        "--profile",
+        "franka",
+        "--out",
+        s(&csv),
+        "--rate",
+        "50",
+    ];
+    let (code, _, err) = admittance(&args);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("200 Hz") && err.contains("--accept-low-rate"),
+        "{err}"
+    );
+    let mut accepted = args.to_vec();
+    accepted.push("--accept-low-rate");
+    let (code, _, err) = admittance(&accepted);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("WARNING") && err.contains("--rate 50.000 Hz"),
+        "{err}"
+    );
+}

@@ -2,11 +2,16 @@
 //! file: the test build is the longest part of a fresh clone's test command). Tests
 //! that install a counting global allocator stay binaries of their own beside it.
 
+mod contact_cli;
+mod deploy_cli;
 mod dynamics_cli;
+mod evaluate_settings;
 mod excite_cli;
 mod gains_health_cli;
 mod identify_cli;
 mod import_cli;
+mod payload_cli;
+mod planted_files;
 mod reliability;
 mod report_cli;
 mod ros2_cli;

@@ -140,6 +140,10 @@ pub struct TaskSpaceAdmittance {
     qdot_ik: Vec<f64>,
     posture: Vec<f64>,
     joint_deviation_acceleration: Vec<f64>,
+    /// Per-joint deadband on the estimate (issue 31, item 3); empty: none.
+    deadband: Vec<f64>,
+    /// The estimate through the deadband (scratch).
+    deadbanded: Vec<f64>,
     has_output: bool,
 }
 
@@ -214,9 +218,43 @@ impl TaskSpaceAdmittance {
             q_ik: zeros.clone(),
             qdot_ik: zeros.clone(),
             posture: zeros.clone(),
-            joint_deviation_acceleration: zeros,
+            joint_deviation_acceleration: zeros.clone(),
+            deadband: Vec::new(),
+            deadbanded: zeros,
             has_output: false,
         })
+    }
+
+    /// The same admittance with a deadband on the joint-torque estimate per joint (N m),
+    /// applied before the wrench is estimated: see [`crate::Admittance::with_deadband`].
+    pub fn with_deadband(mut self, deadband: &[f64]) -> Result<Self, ConfigError> {
+        if deadband.len() != self.n {
+            return Err(ConfigError::new(
+                "deadband",
+                format!(
+                    "has {} values for {} joints: give one per joint",
+                    deadband.len(),
+                    self.n
+                ),
+            ));
+        }
+        if let Some(i) = deadband.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
+            return Err(ConfigError::new(
+                format!("deadband[{i}]"),
+                format!("is {}: must be finite and >= 0 (N m)", deadband[i]),
+            ));
+        }
+        self.deadband = if deadband.iter().all(|d| *d == 0.0) {
+            Vec::new()
+        } else {
+            deadband.to_vec()
+        };
+        Ok(self)
+    }
+
+    /// The deadband per joint (empty when there is none).
+    pub fn deadband(&self) -> &[f64] {
+        &self.deadband
     }
 
     /// Number of joints.
@@ -328,9 +366,22 @@ impl TaskSpaceAdmittance {
         self.jacobian_measured.copy_from(j);
         keep_task_rows(&mut self.jacobian_measured, &self.task);
         self.wrench_inverse.factor(&self.jacobian_measured)?;
+        let estimate = if self.deadband.is_empty() {
+            input.external_torque_estimate
+        } else {
+            for ((o, &e), &d) in self
+                .deadbanded
+                .iter_mut()
+                .zip(input.external_torque_estimate)
+                .zip(&self.deadband)
+            {
+                *o = crate::contact::soft_deadband(e, d);
+            }
+            &self.deadbanded
+        };
         let mut wrench = self
             .wrench_inverse
-            .transpose_apply(&self.jacobian_measured, input.external_torque_estimate);
+            .transpose_apply(&self.jacobian_measured, estimate);
         keep_task_entries(&mut wrench, &self.task);
         let (mut dx, mut dx_rate, mut dx_acceleration) =
             (Vector6::zeros(), Vector6::zeros(), Vector6::zeros());

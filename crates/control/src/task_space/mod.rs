@@ -16,7 +16,35 @@ mod hand;
 mod so3;
 
 pub use admittance::{TaskSpaceAdmittance, TaskSpaceInput};
+
+use crate::admittance::Saturation;
+use crate::error::StepStatus;
+use crate::reference::{CompliantReference, ReferenceInput};
 pub use config::{
     AxisAdmittanceConfig, InverseKinematicsConfig, SingularityDampingConfig, TaskAxis,
     TaskSaturationConfig, TaskSpaceAdmittanceConfig,
 };
+
+impl CompliantReference for TaskSpaceAdmittance {
+    fn dof(&self) -> usize {
+        TaskSpaceAdmittance::dof(self)
+    }
+    fn step_reference(&mut self, input: &ReferenceInput, dt: f64) -> StepStatus {
+        self.step(input, dt)
+    }
+    fn q_r(&self) -> &[f64] {
+        TaskSpaceAdmittance::q_r(self)
+    }
+    fn qdot_r(&self) -> &[f64] {
+        TaskSpaceAdmittance::qdot_r(self)
+    }
+    fn qddot_r(&self) -> &[f64] {
+        TaskSpaceAdmittance::qddot_r(self)
+    }
+    fn saturation(&self) -> Option<&Saturation> {
+        TaskSpaceAdmittance::saturation(self)
+    }
+    fn reset(&mut self) {
+        TaskSpaceAdmittance::reset(self)
+    }
+}

@@ -7,6 +7,7 @@ mod common;
 
 mod admittance;
 mod closed_loop;
+mod contact;
 mod joint_values;
 mod neural_api;
 mod safe_hold;

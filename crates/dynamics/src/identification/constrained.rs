@@ -1,12 +1,17 @@
-//! The identification least squares over physically possible bodies only: each body in
-//! log-Cholesky coordinates (`consistency.rs`), the joint terms as they are, minimised by
-//! Levenberg-Marquardt on the normal equations (the cost is quadratic in the parameters,
-//! so each step needs only the Gram matrix, never the samples).
+//! The identification least squares over physically possible arms only (issue 30): each
+//! body in log-Cholesky coordinates (`consistency.rs`), and each joint's rotor inertia,
+//! viscous friction and friction curve kept dissipative by bounds (`JointTerms::is_physical`:
+//! `I_a >= 0`, `F_v >= 0`, `F_c1 >= 0`, `F_c1 + F_c2 >= 0`), minimised together by a
+//! projected Levenberg-Marquardt on the normal equations (the cost is quadratic in the
+//! parameters, so each step needs only the Gram matrix, never the samples). The bounds are
+//! part of the fit, not a clipping afterwards: a bound that binds hands its share of the
+//! torque to the other terms.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
 use crate::identification::consistency::{from_log_cholesky, margin, to_log_cholesky};
+use crate::identification::joint_terms::JOINT_FEATURES;
 use crate::identification::normal::{reduced_system, Normal};
 
 const MAX_ITERATIONS: usize = 300;
@@ -21,155 +26,259 @@ struct Quadratic {
 }
 
 impl Quadratic {
-    fn new(
-        normal: &Normal,
-        active: &[bool],
-        prior: &DVector<f64>,
-        ridge: f64,
-    ) -> (Self, Vec<usize>) {
-        let (a, c, idx) = reduced_system(normal, active, prior, ridge);
-        (
-            Quadratic {
-                a,
-                c,
-                yy: normal.yy,
-            },
-            idx,
-        )
-    }
-
     fn cost(&self, x: &DVector<f64>) -> f64 {
         self.yy + x.dot(&(&self.a * x)) - 2.0 * self.c.dot(x)
     }
 }
 
-/// The free coordinates: log-Cholesky per body (bodies without one stay at the prior),
-/// then the active joint-term columns.
+/// How one body's ten parameters are free.
+#[derive(Clone, Copy)]
+enum Body {
+    /// Held at the prior (a massless prior body cannot be placed in log-Cholesky).
+    Fixed,
+    /// Physically possible by construction: log-Cholesky coordinates from `start` in `z`,
+    /// with the body's margin.
+    Consistent { start: usize, margin: f64 },
+    /// The parameters themselves from `start` (the user turned consistency off).
+    Linear { start: usize },
+}
+
+/// The free coordinates `z` of the reduced solution `x`: the bodies (see [`Body`]), then
+/// the active joint columns. Joint coordinates are `x` itself except the second Coulomb
+/// level, whose coordinate is the sum `F_c1 + F_c2`, so that every joint bound is `z >= 0`.
 struct Coordinates {
-    /// Per body: where its coordinates start in `z` and its margin, or `None` (fixed).
-    bodies: Vec<Option<(usize, f64)>>,
-    z: DVector<f64>,
-    first_joint: usize,
+    bodies: Vec<Body>,
+    /// Per joint coordinate (from `first_joint_z`): the coordinate it is offset by
+    /// (`x = z - z[pair]`), for the second Coulomb level.
+    pair: Vec<Option<usize>>,
+    /// Per coordinate of `z`: bounded below by zero.
+    bounded: Vec<bool>,
+    first_joint_x: usize,
+    first_joint_z: usize,
     len: usize,
 }
 
 impl Coordinates {
-    fn to_x(&self, z: &DVector<f64>, fixed: &DVector<f64>) -> DVector<f64> {
-        let mut x = fixed.clone();
-        for (b, slot) in self.bodies.iter().enumerate() {
-            if let Some((s, eps)) = *slot {
-                let mut t = [0.0; PARAMETERS_PER_BODY];
-                t.copy_from_slice(&z.as_slice()[s..s + PARAMETERS_PER_BODY]);
-                x.rows_mut(b * PARAMETERS_PER_BODY, PARAMETERS_PER_BODY)
-                    .copy_from_slice(&from_log_cholesky(&t, eps));
+    /// For the active columns `idx` (full column indices) of an arm of `bodies` bodies.
+    fn new(idx: &[usize], bodies: usize, physical: bool, prior: &[f64]) -> (Self, usize) {
+        let inertial = bodies * PARAMETERS_PER_BODY;
+        let mut slots = Vec::with_capacity(bodies);
+        let mut z_len = 0;
+        for b in 0..bodies {
+            let mut p = [0.0; PARAMETERS_PER_BODY];
+            p.copy_from_slice(&prior[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+            let slot = if !physical {
+                Body::Linear { start: z_len }
+            } else {
+                let eps = margin(&p);
+                match to_log_cholesky(&p, eps) {
+                    Some(_) => Body::Consistent {
+                        start: z_len,
+                        margin: eps,
+                    },
+                    None => Body::Fixed,
+                }
+            };
+            if !matches!(slot, Body::Fixed) {
+                z_len += PARAMETERS_PER_BODY;
             }
+            slots.push(slot);
         }
-        let joints = x.len() - self.first_joint;
-        let start = z.len() - joints;
-        x.rows_mut(self.first_joint, joints)
-            .copy_from(&z.rows(start, joints));
-        x
+        let joint_cols: Vec<usize> = idx.iter().copied().filter(|&c| c >= inertial).collect();
+        let first_joint_z = z_len;
+        let mut pair = Vec::with_capacity(joint_cols.len());
+        let mut bounded = vec![false; first_joint_z];
+        for &c in &joint_cols {
+            let feature = (c - inertial) % JOINT_FEATURES;
+            // Rotor inertia, viscous and both Coulomb coordinates are bounded below by zero.
+            bounded.push(feature < 4);
+            pair.push(if feature == 3 {
+                joint_cols
+                    .iter()
+                    .position(|&o| o == c - 1)
+                    .map(|p| first_joint_z + p)
+            } else {
+                None
+            });
+        }
+        let coords = Coordinates {
+            bodies: slots,
+            pair,
+            bounded,
+            first_joint_x: idx.len() - joint_cols.len(),
+            first_joint_z,
+            len: idx.len(),
+        };
+        (coords, first_joint_z + joint_cols.len())
     }
 
-    /// `dx/dz` (the bodies' 10 x 10 blocks by central differences; identity for joints).
-    fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
-        let joints = self.len - self.first_joint;
-        let mut jac = DMatrix::zeros(self.len, z.len());
+    /// The coordinates of the reduced solution `x`, projected onto the bounds; `None` when
+    /// a body cannot be expressed (not physically possible).
+    fn from_x(&self, x: &DVector<f64>, z_len: usize) -> Option<DVector<f64>> {
+        let mut z = DVector::zeros(z_len);
         for (b, slot) in self.bodies.iter().enumerate() {
-            let Some((s, eps)) = *slot else { continue };
-            for k in 0..PARAMETERS_PER_BODY {
-                let mut t = [0.0; PARAMETERS_PER_BODY];
-                t.copy_from_slice(&z.as_slice()[s..s + PARAMETERS_PER_BODY]);
-                t[k] += STEP;
-                let plus = from_log_cholesky(&t, eps);
-                t[k] -= 2.0 * STEP;
-                let minus = from_log_cholesky(&t, eps);
-                for r in 0..PARAMETERS_PER_BODY {
-                    jac[(b * PARAMETERS_PER_BODY + r, s + k)] = (plus[r] - minus[r]) / (2.0 * STEP);
+            let mut p = [0.0; PARAMETERS_PER_BODY];
+            p.copy_from_slice(&x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+            match *slot {
+                Body::Fixed => {}
+                Body::Consistent { start, margin } => {
+                    let t = to_log_cholesky(&p, margin)?;
+                    z.rows_mut(start, PARAMETERS_PER_BODY).copy_from_slice(&t);
+                }
+                Body::Linear { start } => {
+                    z.rows_mut(start, PARAMETERS_PER_BODY).copy_from_slice(&p);
                 }
             }
         }
-        let start = z.len() - joints;
-        for j in 0..joints {
-            jac[(self.first_joint + j, start + j)] = 1.0;
+        for j in 0..self.pair.len() {
+            z[self.first_joint_z + j] = x[self.first_joint_x + j];
+        }
+        for j in 0..self.pair.len() {
+            if let Some(p) = self.pair[j] {
+                z[self.first_joint_z + j] += z[p];
+            }
+        }
+        self.project(&mut z);
+        Some(z)
+    }
+
+    fn project(&self, z: &mut DVector<f64>) {
+        for (v, &b) in z.iter_mut().zip(&self.bounded) {
+            if b && *v < 0.0 {
+                *v = 0.0;
+            }
+        }
+    }
+
+    fn to_x(&self, z: &DVector<f64>, fixed: &DVector<f64>) -> DVector<f64> {
+        let mut x = fixed.clone();
+        for (b, slot) in self.bodies.iter().enumerate() {
+            let rows = b * PARAMETERS_PER_BODY;
+            match *slot {
+                Body::Fixed => {}
+                Body::Consistent { start, margin } => {
+                    let mut t = [0.0; PARAMETERS_PER_BODY];
+                    t.copy_from_slice(&z.as_slice()[start..start + PARAMETERS_PER_BODY]);
+                    x.rows_mut(rows, PARAMETERS_PER_BODY)
+                        .copy_from_slice(&from_log_cholesky(&t, margin));
+                }
+                Body::Linear { start } => {
+                    x.rows_mut(rows, PARAMETERS_PER_BODY)
+                        .copy_from(&z.rows(start, PARAMETERS_PER_BODY));
+                }
+            }
+        }
+        for (j, pair) in self.pair.iter().enumerate() {
+            let offset = pair.map_or(0.0, |p| z[p]);
+            x[self.first_joint_x + j] = z[self.first_joint_z + j] - offset;
+        }
+        x
+    }
+
+    /// `dx/dz` (the consistent bodies' 10 x 10 blocks by central differences).
+    fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
+        let mut jac = DMatrix::zeros(self.len, z.len());
+        for (b, slot) in self.bodies.iter().enumerate() {
+            let rows = b * PARAMETERS_PER_BODY;
+            match *slot {
+                Body::Fixed => {}
+                Body::Linear { start } => {
+                    for k in 0..PARAMETERS_PER_BODY {
+                        jac[(rows + k, start + k)] = 1.0;
+                    }
+                }
+                Body::Consistent { start, margin } => {
+                    for k in 0..PARAMETERS_PER_BODY {
+                        let mut t = [0.0; PARAMETERS_PER_BODY];
+                        t.copy_from_slice(&z.as_slice()[start..start + PARAMETERS_PER_BODY]);
+                        t[k] += STEP;
+                        let plus = from_log_cholesky(&t, margin);
+                        t[k] -= 2.0 * STEP;
+                        let minus = from_log_cholesky(&t, margin);
+                        for r in 0..PARAMETERS_PER_BODY {
+                            jac[(rows + r, start + k)] = (plus[r] - minus[r]) / (2.0 * STEP);
+                        }
+                    }
+                }
+            }
+        }
+        for (j, pair) in self.pair.iter().enumerate() {
+            jac[(self.first_joint_x + j, self.first_joint_z + j)] = 1.0;
+            if let Some(p) = *pair {
+                jac[(self.first_joint_x + j, p)] = -1.0;
+            }
         }
         jac
     }
 }
 
-/// The minimiser over physically possible bodies, started from the prior (whose bodies
-/// are physically possible, or projected onto that set first). Returns the full solution
-/// vector (inactive columns at the prior).
-pub(crate) fn solve_consistent(
+/// The minimiser over physically possible arms (bodies possible when `physical`, joint
+/// terms always), started from the prior and from the unconstrained solution projected
+/// onto the possible set. Returns the full solution vector (inactive columns at the prior).
+pub(crate) fn solve_physical(
     normal: &Normal,
     active: &[bool],
     prior: &DVector<f64>,
     ridge: f64,
     bodies: usize,
+    physical: bool,
 ) -> Option<DVector<f64>> {
-    let (quad, idx) = Quadratic::new(normal, active, prior, ridge);
-    let inertial = bodies * PARAMETERS_PER_BODY;
-    // Two starts: the prior, and the unconstrained solution with its bodies projected onto
-    // the possible ones (near the optimum when the data agree with physics).
+    let (a, c, idx) = reduced_system(normal, active, prior, ridge);
+    let quad = Quadratic {
+        a,
+        c,
+        yy: normal.yy,
+    };
     let from_prior: DVector<f64> = DVector::from_fn(idx.len(), |r, _| prior[idx[r]]);
-    let mut best: Option<(f64, Coordinates, DVector<f64>)> = None;
+    let (coords, z_len) = Coordinates::new(&idx, bodies, physical, from_prior.as_slice());
     let free = crate::identification::normal::solve(normal, active, prior, ridge)
         .map(|x| DVector::from_fn(idx.len(), |r, _| x[idx[r]]));
+    let mut best: Option<(f64, DVector<f64>)> = None;
     for start in [Some(from_prior.clone()), free].into_iter().flatten() {
-        let mut slots = Vec::with_capacity(bodies);
-        let mut z0 = Vec::new();
-        for b in 0..bodies {
-            let mut p = [0.0; PARAMETERS_PER_BODY];
-            p.copy_from_slice(
-                &start.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
-            );
-            let mut prior_body = [0.0; PARAMETERS_PER_BODY];
-            prior_body.copy_from_slice(
-                &from_prior.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
-            );
-            // A body the prior cannot place (massless) stays at the prior.
-            let eps = margin(&prior_body);
-            match to_log_cholesky(&prior_body, eps).and(to_log_cholesky(&p, eps)) {
-                Some(t) => {
-                    slots.push(Some((z0.len(), eps)));
-                    z0.extend_from_slice(&t);
-                }
-                None => slots.push(None),
-            }
-        }
-        z0.extend_from_slice(&start.as_slice()[inertial..]);
-        let coords = Coordinates {
-            bodies: slots,
-            z: DVector::from_vec(z0),
-            first_joint: inertial,
-            len: idx.len(),
+        // A start's impossible bodies are projected onto the possible set.
+        let Some(z) = coords.from_x(&start, z_len) else {
+            continue;
         };
-        let cost = quad.cost(&coords.to_x(&coords.z, &from_prior));
+        let cost = quad.cost(&coords.to_x(&z, &from_prior));
         if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.0) {
-            best = Some((cost, coords, from_prior.clone()));
+            best = Some((cost, z));
         }
     }
-    let (_, coords, start) = best?;
-    let mut z = coords.z.clone();
-    let mut x = coords.to_x(&z, &start);
-    let mut cost = quad.cost(&x);
+    let (mut cost, mut z) = best?;
+    let mut x = coords.to_x(&z, &from_prior);
     let mut mu = 1e-3;
     for _ in 0..MAX_ITERATIONS {
         let jac = coords.jacobian(&z);
-        let grad = jac.transpose() * (&quad.a * &x - &quad.c);
+        let mut grad = jac.transpose() * (&quad.a * &x - &quad.c);
         let hess = jac.transpose() * &quad.a * &jac;
+        // Coordinates at their bound whose gradient pushes them out are held this step.
+        let held: Vec<bool> = (0..z.len())
+            .map(|i| coords.bounded[i] && z[i] <= 0.0 && grad[i] > 0.0)
+            .collect();
+        for (i, &h) in held.iter().enumerate() {
+            if h {
+                grad[i] = 0.0;
+            }
+        }
         let mut improved = false;
         for _ in 0..12 {
             let mut h = hess.clone();
             for i in 0..h.nrows() {
-                h[(i, i)] += mu * hess[(i, i)].max(1e-12);
+                if held[i] {
+                    h.row_mut(i).fill(0.0);
+                    h.column_mut(i).fill(0.0);
+                    h[(i, i)] = 1.0;
+                } else {
+                    h[(i, i)] += mu * hess[(i, i)].max(1e-12);
+                }
             }
             let Some(step) = h.cholesky().map(|c| c.solve(&grad)) else {
                 mu *= 10.0;
                 continue;
             };
-            let trial = &z - step;
-            let x_trial = coords.to_x(&trial, &start);
+            let mut trial = &z - step;
+            coords.project(&mut trial);
+            let x_trial = coords.to_x(&trial, &from_prior);
             let c_trial = quad.cost(&x_trial);
             if c_trial.is_finite() && c_trial < cost {
                 let gain = cost - c_trial;
@@ -187,8 +296,8 @@ pub(crate) fn solve_consistent(
         }
     }
     let mut full = prior.clone();
-    for (r, &c) in idx.iter().enumerate() {
-        full[c] = x[r];
+    for (r, &col) in idx.iter().enumerate() {
+        full[col] = x[r];
     }
     full.iter().all(|v| v.is_finite()).then_some(full)
 }

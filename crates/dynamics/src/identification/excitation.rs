@@ -8,9 +8,11 @@
 //! (`a_i1 = -sum a_il`, `b_i1 = -sum l b_il`), which makes velocity and acceleration zero at
 //! `t = 0` and at every multiple of the period: the motion starts and ends at rest with no
 //! blending. Each joint's oscillation is then scaled down until its position stays inside
-//! the limits less a margin, its speed under the URDF's velocity limit (1.5 rad/s where
-//! the URDF gives none) and its acceleration under a set limit, all checked on the
-//! output's sampling grid; the offset `q0` centres it in the range.
+//! the envelope the user states (a range around a pose, by default +-0.5 rad around the
+//! middle of the limits, inside the limits less a margin), its speed under a fraction
+//! (default 30 %) of the URDF's velocity limit (1.5 rad/s where the URDF gives none) and
+//! its acceleration under a fraction (default 30 %) of a set limit, all checked on the
+//! output's sampling grid; the offset `q0` centres it in the envelope.
 //!
 //! The free coefficients are chosen for the condition number of the base inertial
 //! regressor (the identifiable combinations of the 10 parameters per body, columns at
@@ -58,7 +60,24 @@ pub struct ExcitationSettings {
     /// Condition-number evaluations of the local search after the random starts.
     /// Default 2000 (about 2 s for a 7-joint arm).
     pub iterations: usize,
+    /// Centre of the envelope, one value per joint (rad or m); empty (the default): the
+    /// middle of each joint's limits (0 for a joint without limits).
+    pub pose: Vec<f64>,
+    /// Half-width of each joint's range around `pose` (rad or m): one value for every
+    /// joint or one per joint; infinite: the URDF's whole range. The range is also kept
+    /// inside the limits less `position_margin`. Default `[0.5]`.
+    pub range: Vec<f64>,
+    /// Fraction (0 to 1] of each joint's velocity limit (the URDF's, or
+    /// [`DEFAULT_VELOCITY_LIMIT`]) the motion may reach. Default 0.3.
+    pub velocity_fraction: f64,
+    /// Fraction (0 to 1] of `acceleration_limit` the motion may reach. Default 0.3.
+    pub acceleration_fraction: f64,
 }
+
+/// Default half-width of each joint's range around the pose (rad or m).
+pub const DEFAULT_EXCITATION_RANGE: f64 = 0.5;
+/// Default fraction of the velocity and acceleration limits an excitation may reach.
+pub const DEFAULT_LIMIT_FRACTION: f64 = 0.3;
 
 impl Default for ExcitationSettings {
     fn default() -> Self {
@@ -71,6 +90,10 @@ impl Default for ExcitationSettings {
             position_margin: 0.05,
             seed: 1,
             iterations: 2000,
+            pose: Vec::new(),
+            range: vec![DEFAULT_EXCITATION_RANGE],
+            velocity_fraction: DEFAULT_LIMIT_FRACTION,
+            acceleration_fraction: DEFAULT_LIMIT_FRACTION,
         }
     }
 }
@@ -139,6 +162,77 @@ impl ExcitationSettings {
                 ),
             );
         }
+        for (key, v) in [
+            ("velocity_fraction", self.velocity_fraction),
+            ("acceleration_fraction", self.acceleration_fraction),
+        ] {
+            if !(v > 0.0 && v <= 1.0) {
+                return bad(
+                    key,
+                    format!("is {v}, must be above 0 and at most 1 (default 0.3)"),
+                );
+            }
+        }
+        if self.range.is_empty() {
+            return bad(
+                "range",
+                "is empty: give one half-width for every joint or one per joint (default 0.5)"
+                    .into(),
+            );
+        }
+        if let Some((i, v)) = self.range.iter().enumerate().find(|(_, v)| !(**v > 0.0)) {
+            return bad("range", format!("element {i} is {v}, must be a positive half-width (rad or m; infinite: the whole range)"));
+        }
+        if let Some((i, v)) = self.pose.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return bad(
+                "pose",
+                format!("element {i} is {v}, must be a finite position"),
+            );
+        }
+        Ok(())
+    }
+
+    /// Checks the envelope against `model`: one pose value per joint (or none), one range
+    /// per joint (or one for all), each pose inside its joint's limits less the margin.
+    pub fn validate_for(&self, model: &Model) -> Result<(), DynamicsError> {
+        self.validate()?;
+        let n = model.nq();
+        let bad = |key: &str, m: String| {
+            Err(DynamicsError::InvalidArgument(format!(
+                "excitation setting {key}: {m}"
+            )))
+        };
+        if !self.pose.is_empty() && self.pose.len() != n {
+            return bad(
+                "pose",
+                format!(
+                    "has {} values for an arm of {n} joints: give one per joint",
+                    self.pose.len()
+                ),
+            );
+        }
+        if self.range.len() != 1 && self.range.len() != n {
+            return bad(
+                "range",
+                format!(
+                    "has {} values for an arm of {n} joints: give one for all or one per joint",
+                    self.range.len()
+                ),
+            );
+        }
+        for (i, (j, b)) in model.joints.iter().zip(Bounds::of(model, self)).enumerate() {
+            if let Some(&p) = self.pose.get(i) {
+                if !(p >= b.lowest - 1e-12 && p <= b.highest + 1e-12) {
+                    return bad(
+                        "pose",
+                        format!(
+                            "joint {} ({}) at {p} is outside its limits less the margin [{}, {}]",
+                            i, j.name, b.lowest, b.highest
+                        ),
+                    );
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -200,14 +294,16 @@ pub struct Excitation {
     pub base_parameters: usize,
 }
 
-/// How much of a joint's limits an excitation uses (1 = at the limit).
+/// How much of its envelope an excitation uses on a joint (1 = at the envelope's edge).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LimitUse {
-    /// `max |q - middle| / (half the range)`; NaN for a joint without position limits.
+    /// `max |q - centre| / half-width` of the envelope's position interval (the range
+    /// around the pose inside the limits less the margin); NaN for a joint with neither.
     pub position: f64,
-    /// `max |qdot| / velocity limit` (the URDF's, or [`DEFAULT_VELOCITY_LIMIT`]).
+    /// `max |qdot| / (velocity_fraction * velocity limit)` (the URDF's limit, or
+    /// [`DEFAULT_VELOCITY_LIMIT`]).
     pub velocity: f64,
-    /// `max |qddot| / acceleration_limit`.
+    /// `max |qddot| / (acceleration_fraction * acceleration_limit)`.
     pub acceleration: f64,
 }
 
@@ -232,8 +328,8 @@ impl Excitation {
                 let peak = |v: Vec<f64>, c: f64| v.iter().fold(0.0f64, |m, x| m.max((x - c).abs()));
                 let b = &bounds[i];
                 LimitUse {
-                    position: if b.half_range.is_finite() {
-                        peak(col(&self.q), b.middle) / b.half_range
+                    position: if b.allowed.is_finite() {
+                        peak(col(&self.q), b.middle) / b.allowed
                     } else {
                         f64::NAN
                     },
@@ -245,12 +341,15 @@ impl Excitation {
     }
 }
 
-/// A joint's limits as the excitation uses them.
+/// A joint's envelope as the excitation uses it.
 struct Bounds {
+    /// Centre of the position interval.
     middle: f64,
-    half_range: f64,
-    /// Half the range less the margin (infinite without position limits).
+    /// Half-width of the position interval (infinite without limits or range).
     allowed: f64,
+    /// The position interval: the range around the pose inside the limits less the margin.
+    lowest: f64,
+    highest: f64,
     velocity: f64,
     acceleration: f64,
 }
@@ -260,42 +359,59 @@ impl Bounds {
         model
             .joints
             .iter()
-            .map(|j| {
+            .enumerate()
+            .map(|(i, j)| {
                 let l = &j.limits;
                 let limited = l.lower.is_finite() && l.upper.is_finite();
-                let half_range = if limited {
-                    0.5 * (l.upper - l.lower)
+                let (lower, upper) = if limited {
+                    let m = settings.position_margin * (l.upper - l.lower);
+                    (l.lower + m, l.upper - m)
                 } else {
-                    f64::INFINITY
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                };
+                let pose = settings.pose.get(i).copied().unwrap_or(if limited {
+                    0.5 * (l.upper + l.lower)
+                } else {
+                    0.0
+                });
+                let range = match settings.range.as_slice() {
+                    [one] => *one,
+                    many => many.get(i).copied().unwrap_or(f64::INFINITY),
+                };
+                let lowest = (pose - range).max(lower);
+                let highest = (pose + range).min(upper).max(lowest);
+                let (middle, allowed) = if lowest.is_finite() && highest.is_finite() {
+                    (0.5 * (lowest + highest), 0.5 * (highest - lowest))
+                } else {
+                    (pose, f64::INFINITY)
+                };
+                let velocity = if l.velocity.is_finite() && l.velocity > 0.0 {
+                    l.velocity
+                } else {
+                    DEFAULT_VELOCITY_LIMIT
                 };
                 Bounds {
-                    middle: if limited {
-                        0.5 * (l.upper + l.lower)
-                    } else {
-                        0.0
-                    },
-                    half_range,
-                    allowed: half_range * (1.0 - 2.0 * settings.position_margin),
-                    velocity: if l.velocity.is_finite() && l.velocity > 0.0 {
-                        l.velocity
-                    } else {
-                        DEFAULT_VELOCITY_LIMIT
-                    },
-                    acceleration: settings.acceleration_limit,
+                    middle,
+                    allowed,
+                    lowest,
+                    highest,
+                    velocity: settings.velocity_fraction * velocity,
+                    acceleration: settings.acceleration_fraction * settings.acceleration_limit,
                 }
             })
             .collect()
     }
 }
 
-/// An excitation for `model` within its limits, optimised for the condition number of the
-/// base inertial regressor. Deterministic for a seed.
+/// An excitation for `model` within the envelope of `settings` (a range around a pose,
+/// fractions of the speed and acceleration limits), optimised for the condition number of
+/// the base inertial regressor. Deterministic for a seed.
 ///
 /// Per joint `q(t) = q0 + sum_l a_l / (w l) sin(w l t) - b_l / (w l) cos(w l t)`, `w = 2 pi /
 /// period`, with `a_1`, `b_1` fixed so that the motion starts and ends at rest; each joint
-/// scaled to its position range less the margin, its velocity limit
-/// ([`DEFAULT_VELOCITY_LIMIT`] where the URDF has none) and `acceleration_limit` on the output
-/// samples. The criterion is the base inertial regressor's condition number (columns at unit
+/// scaled to its envelope on the output samples: `range` around `pose` inside the limits less
+/// the margin, `velocity_fraction` of its velocity limit ([`DEFAULT_VELOCITY_LIMIT`] where
+/// the URDF has none) and `acceleration_fraction` of `acceleration_limit`. The criterion is the base inertial regressor's condition number (columns at unit
 /// norm; the joint terms are not included), lowered from 16 random starts by a coordinate
 /// search of `iterations` evaluations.
 ///
@@ -309,7 +425,7 @@ pub fn excitation(
     model: &Model,
     settings: &ExcitationSettings,
 ) -> Result<Excitation, DynamicsError> {
-    settings.validate()?;
+    settings.validate_for(model)?;
     if model.nq() == 0 {
         return Err(DynamicsError::InvalidArgument(
             "excitation needs an arm with at least one joint".into(),

@@ -103,25 +103,8 @@ impl Identification {
             "payload": payload,
         });
         let text = serde_json::to_string_pretty(&envelope).map_err(|e| err(path, e))? + "\n";
-        let dir = path
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        let tmp: PathBuf = dir.join(format!(
-            ".{}.tmp{}",
-            path.file_name()
-                .and_then(|s| s.to_str())
-                .unwrap_or("identification"),
-            std::process::id()
-        ));
-        std::fs::write(&tmp, text).map_err(|e| err(&tmp, format!("cannot write: {e}")))?;
-        std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            err(
-                path,
-                format!("cannot move the written file into place: {e}"),
-            )
-        })
+        admittance_files::write_atomic(path, text.as_bytes())
+            .map_err(|e| err(path, format!("cannot write: {e}")))
     }
 
     /// Reads an identification file and applies it to `urdf_model`, which must be the
@@ -170,20 +153,7 @@ impl Identification {
         if file.joint_terms.len() != n || file.inertial_parameters.len() != 10 * n {
             return Err(err(path, format!("holds {} joint terms and {} parameters for an arm of {n} joints: the file is damaged", file.joint_terms.len(), file.inertial_parameters.len())));
         }
-        if let Some(i) = file.joint_terms.iter().position(|t| !t.is_valid()) {
-            return Err(err(
-                path,
-                format!(
-                    "joint_terms[{i}] holds a non-finite value or a non-positive coulomb_width"
-                ),
-            ));
-        }
-        if let Some(i) = file.inertial_parameters.iter().position(|v| !v.is_finite()) {
-            return Err(err(
-                path,
-                format!("inertial_parameters[{i}] is not a finite number"),
-            ));
-        }
+        check_physical(file).map_err(|m| err(path, m))?;
         let model = crate::algorithms::regressor::with_inertial_parameters(
             urdf_model,
             &file.inertial_parameters,
@@ -196,9 +166,71 @@ impl Identification {
     }
 }
 
+/// The largest magnitude a stored coefficient may have (kg, kg m, kg m^2, N m and their
+/// rates): no arm's link or joint comes near it, a damaged or edited file may.
+pub const MAX_COEFFICIENT: f64 = 1e6;
+
+/// What the physics requires of a file's contents (docs/outputs.md, "Identification
+/// files"): every number finite and within [`MAX_COEFFICIENT`], every body of positive mass
+/// and physically consistent inertia, every joint's terms physical
+/// ([`JointTerms::physical_problem`]). The message names the body or joint and the value.
+fn check_physical(file: &IdentificationFile) -> Result<(), String> {
+    use crate::algorithms::regressor::PARAMETERS_PER_BODY;
+    use crate::identification::is_physically_consistent;
+    use crate::spatial::Inertia;
+    let joint = |i: usize| file.joints.get(i).map_or("?", String::as_str);
+    for (k, v) in file.inertial_parameters.iter().enumerate() {
+        if !(v.abs() <= MAX_COEFFICIENT) {
+            return Err(format!(
+                "inertial_parameters[{k}] (body {}, moved by joint '{}') is {v:e}: not a finite number within +-{MAX_COEFFICIENT:e}",
+                k / PARAMETERS_PER_BODY,
+                joint(k / PARAMETERS_PER_BODY)
+            ));
+        }
+    }
+    for (i, p) in file
+        .inertial_parameters
+        .chunks_exact(PARAMETERS_PER_BODY)
+        .enumerate()
+    {
+        let p: &[f64; PARAMETERS_PER_BODY] = p.try_into().expect("chunks of 10");
+        if !(p[0] > 0.0) {
+            return Err(format!(
+                "body {i} (moved by joint '{}') has mass {} kg: a body's mass must be positive",
+                joint(i),
+                p[0]
+            ));
+        }
+        if !is_physically_consistent(&Inertia::from_parameters(p)) {
+            return Err(format!(
+                "body {i} (moved by joint '{}') is not physically possible (mass {} kg, first moment [{}, {}, {}] kg m, inertia [{}, {}, {}, {}, {}, {}] kg m^2 about the joint frame): its pseudo-inertia is not positive definite",
+                joint(i), p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9]
+            ));
+        }
+    }
+    for (i, t) in file.joint_terms.iter().enumerate() {
+        if let Some(problem) = t.physical_problem() {
+            return Err(format!(
+                "joint_terms[{i}] (joint '{}'): {problem}",
+                joint(i)
+            ));
+        }
+        let mut values = vec![t.armature, t.viscous, t.coulomb_width, t.offset];
+        values.extend(t.coulomb.iter().chain(&t.spring));
+        if let Some(v) = values.iter().find(|v| v.abs() > MAX_COEFFICIENT) {
+            return Err(format!(
+                "joint_terms[{i}] (joint '{}') holds {v:e}: beyond +-{MAX_COEFFICIENT:e}",
+                joint(i)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The checked envelope's payload.
 fn read_envelope(path: &Path) -> Result<Value, DynamicsError> {
-    let text = std::fs::read_to_string(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let text = admittance_files::read_regular_text(path, admittance_files::TEXT_LIMIT)
+        .map_err(|e| err(path, format!("cannot read: {e}")))?;
     let mut v: Value = serde_json::from_str(&text).map_err(|e| {
         err(
             path,

@@ -7,37 +7,106 @@ use nalgebra::DVector;
 use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
 use crate::error::DynamicsError;
 use crate::identification::base::BaseParameters;
-use crate::identification::constrained::solve_consistent;
+use crate::identification::constrained::solve_physical;
 use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
-use crate::identification::normal::{accumulate, columns, solve, Normal};
+use crate::identification::normal::{
+    accumulate, accumulate_parts, columns, shifted_torque, solve, Normal, NormalParts,
+};
 use crate::identification::samples::Samples;
 use crate::identification::settings::IdentificationSettings;
 use crate::identification::{Identification, IdentificationSummary};
 use crate::model::Model;
 
-/// Ridge weights tried when none is given: 1e-8 to 1e2, half a decade apart.
+/// Ridge weights tried first when none is given: 1e-8 to 1e2, a decade apart (the best is
+/// then refined half a decade either side).
 fn ridge_grid() -> impl Iterator<Item = f64> {
-    (0..=20).map(|k| 10f64.powf(-8.0 + 0.5 * k as f64))
+    (0..=10).map(|k| 10f64.powf(-8.0 + k as f64))
 }
 
-/// Where settings are scored: a separate recording, or held-out contiguous stretches.
+/// `f` of every item, on up to as many threads as the machine has cores (the folds of a
+/// cross-validation are independent fits).
+fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .min(items.len());
+    if threads <= 1 {
+        return items.iter().map(f).collect();
+    }
+    let chunk = items.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .chunks(chunk)
+            .map(|part| {
+                let f = &f;
+                scope.spawn(move || part.iter().map(f).collect::<Vec<R>>())
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_default())
+            .collect()
+    })
+}
+
+/// Acceleration gains tried when none is given: how much of the measured acceleration the
+/// prediction trusts (a Wiener gain: 1 for clean accelerations, toward 0 when differentiation
+/// noise swamps the inertial torque). Chosen on held-out motion for the fitted model, whose
+/// inertias stay fitted to the accelerations as measured.
+const GAIN_GRID: [f64; 9] = [1.0, 0.7, 0.5, 0.35, 0.25, 0.15, 0.1, 0.05, 0.0];
+/// Largest delay of a joint's torque behind (or ahead of) the motion tried (s), and at
+/// least this many samples: series-elastic actuators and torque filters lag by some ms.
+const MAX_DELAY_S: f64 = 0.03;
+const MIN_DELAY_SAMPLES: f64 = 2.0;
+/// At most this many candidate shifts per joint (half a sample apart, or wider).
+const MAX_SHIFTS: usize = 25;
+
+/// Candidate shifts of a joint's torque against the motion (samples), zero first.
+fn shift_grid(rate_hz: Option<f64>) -> Vec<f64> {
+    let Some(rate) = rate_hz else {
+        return vec![0.0];
+    };
+    let reach = (MAX_DELAY_S * rate).max(MIN_DELAY_SAMPLES);
+    let step = (2.0 * reach / (MAX_SHIFTS - 1) as f64).max(0.5);
+    let steps = (reach / step).floor() as i64;
+    let mut grid = vec![0.0];
+    for k in 1..=steps {
+        grid.push(k as f64 * step);
+        grid.push(-(k as f64) * step);
+    }
+    grid
+}
+/// Ridge of the plain solves that choose the delay.
+const DELAY_RIDGE: f64 = 1e-3;
+
+/// Where settings are scored: a separate recording, or held-out contiguous stretches; the
+/// normal equations as functions of the acceleration gain and the torque shift.
 enum Held<'a> {
     Recording {
-        train: Normal,
-        validation: Normal,
+        train: NormalParts,
+        validation: NormalParts,
         samples: Samples<'a>,
     },
     Folds {
-        blocks: Vec<Normal>,
-        total: Normal,
+        blocks: Vec<NormalParts>,
+        total: NormalParts,
     },
 }
 
-/// The least-squares solution on `normal` with these columns and ridge: over physically
-/// possible bodies only, or unconstrained.
+/// One candidate: acceleration gain and, per joint, the index of its torque's shift.
+#[derive(Clone)]
+struct Signals {
+    gain: f64,
+    shifts: Vec<usize>,
+}
+
+/// The least-squares solution on `normal` with these columns and ridge: physical joint
+/// terms always, physically possible bodies when `physical`.
 #[derive(Clone, Copy)]
 struct Fitter {
     physical: bool,
+    /// Unconstrained ridge least squares (one factorisation): for choices that physics
+    /// does not bear on.
+    plain: bool,
     bodies: usize,
 }
 
@@ -49,51 +118,74 @@ impl Fitter {
         prior: &DVector<f64>,
         ridge: f64,
     ) -> Option<DVector<f64>> {
-        if self.physical {
-            solve_consistent(normal, active, prior, ridge, self.bodies)
-        } else {
+        if self.plain {
             solve(normal, active, prior, ridge)
+        } else {
+            solve_physical(normal, active, prior, ridge, self.bodies, self.physical)
         }
     }
 }
 
 impl Held<'_> {
-    /// Mean squared error on held-out motion of the fit with these columns and ridge.
-    fn score(&self, fitter: Fitter, active: &[bool], prior: &DVector<f64>, ridge: f64) -> f64 {
+    /// Mean squared error on held-out motion of the fit with these columns, ridge and signals.
+    fn score(
+        &self,
+        fitter: Fitter,
+        active: &[bool],
+        prior: &DVector<f64>,
+        ridge: f64,
+        signals: &Signals,
+    ) -> f64 {
+        let at = |p: &NormalParts| p.at(signals.gain, &signals.shifts);
         match self {
             Held::Recording {
                 train, validation, ..
-            } => match fitter.fit(train, active, prior, ridge) {
-                Some(x) => validation.squared_error(&x) / validation.rows as f64,
-                None => f64::INFINITY,
-            },
-            Held::Folds { blocks, total } => {
-                let mut sse = 0.0;
-                for b in blocks {
-                    let mut rest = total.clone();
-                    rest.sub(b);
-                    match fitter.fit(&rest, active, prior, ridge) {
-                        Some(x) => sse += b.squared_error(&x),
-                        None => return f64::INFINITY,
-                    }
+            } => {
+                let validation = at(validation);
+                match fitter.fit(&at(train), active, prior, ridge) {
+                    Some(x) => validation.squared_error(&x) / validation.rows as f64,
+                    None => f64::INFINITY,
                 }
-                sse / total.rows as f64
+            }
+            Held::Folds { blocks, total } => {
+                let total = at(total);
+                let errors = parallel_map(blocks, |b| {
+                    let b = at(b);
+                    let mut rest = total.clone();
+                    rest.sub(&b);
+                    fitter
+                        .fit(&rest, active, prior, ridge)
+                        .map_or(f64::INFINITY, |x| b.squared_error(&x))
+                });
+                if errors.len() != blocks.len() {
+                    return f64::INFINITY;
+                }
+                errors.iter().sum::<f64>() / total.rows as f64
             }
         }
     }
 
-    fn all_training(&self) -> &Normal {
+    fn all_training(&self, signals: &Signals) -> Normal {
         match self {
-            Held::Recording { train, .. } => train,
-            Held::Folds { total, .. } => total,
+            Held::Recording { train, .. } => train.at(signals.gain, &signals.shifts),
+            Held::Folds { total, .. } => total.at(signals.gain, &signals.shifts),
         }
     }
+}
+
+/// The candidate with the lowest score (`(NaN, inf)` when none is finite).
+fn best_of<T>(candidates: impl Iterator<Item = (T, f64)>, none: T) -> (T, f64) {
+    candidates.fold((none, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best })
 }
 
 /// Identifies `model`'s inertial parameters and joint terms from free-motion `train`
 /// samples (see [`IdentificationSettings`]); `validation`, when given, is another
 /// recording on which every setting is chosen and the expected error measured, else
-/// blocked cross-validation over contiguous stretches of `train` does both.
+/// blocked cross-validation over contiguous stretches of `train` does both. Besides the
+/// ridge and the springs, the held-out motion chooses how much of the measured acceleration
+/// to trust (`acceleration_gain`) and, when the sample rate is given, the delay of the
+/// torque behind the motion (`delay_s`). The result is physical whatever the settings:
+/// joint terms always (`JointTerms::is_physical`), bodies with `physical_consistency`.
 pub fn identify(
     model: &Model,
     train: &Samples,
@@ -120,6 +212,7 @@ pub fn identify(
             )));
         }
     }
+    check_motion(train, "training samples")?;
     let width = settings.coulomb_width;
     let p = columns(n);
     let mut prior = DVector::zeros(p);
@@ -127,16 +220,16 @@ pub fn identify(
         .rows_mut(0, PARAMETERS_PER_BODY * n)
         .copy_from_slice(&inertial_parameters(model));
     let weights = joint_weights(model, train, width, settings.friction, &prior)?;
+    let shifts = shift_grid(settings.sample_rate_hz);
     let held = match validation {
         Some(v) => Held::Recording {
-            train: accumulate(model, train, width, 1, &weights)?.remove(0),
-            validation: accumulate(model, v, width, 1, &weights)?.remove(0),
+            train: accumulate_parts(model, train, width, 1, &weights, &shifts)?.remove(0),
+            validation: accumulate_parts(model, v, width, 1, &weights, &shifts)?.remove(0),
             samples: *v,
         },
         None => {
-            let blocks = accumulate(model, train, width, settings.folds, &weights)?;
-            let mut total = Normal::zeros(columns(n));
-            blocks.iter().for_each(|b| total.add(b));
+            let blocks = accumulate_parts(model, train, width, settings.folds, &weights, &shifts)?;
+            let total = NormalParts::sum(&blocks);
             Held::Folds { blocks, total }
         }
     };
@@ -151,29 +244,64 @@ pub fn identify(
     }
     let fitter = Fitter {
         physical: settings.physical_consistency,
+        plain: false,
         bodies: n,
     };
-    let choose_ridge = |active: &[bool]| -> (f64, f64) {
-        match settings.ridge {
-            Some(r) => (r, held.score(fitter, active, &prior, r)),
-            None => ridge_grid()
-                .map(|r| (r, held.score(fitter, active, &prior, r)))
-                .fold((f64::NAN, f64::INFINITY), |best, c| {
-                    if c.1 < best.1 {
-                        c
-                    } else {
-                        best
-                    }
+    let gains: Vec<f64> = match settings.acceleration_gain {
+        Some(g) => vec![g],
+        None => GAIN_GRID.to_vec(),
+    };
+    // Each joint's delay: plain ridge solves (timing is not a question of physical
+    // consistency, and these cost a factorisation each), one joint at a time.
+    let plain = Fitter {
+        physical: false,
+        plain: true,
+        bodies: n,
+    };
+    // The model is fitted to the accelerations as measured (gain 1: its inertias are the
+    // arm's); the gain that weights noisy accelerations in predictions is chosen after.
+    let mut signals = Signals {
+        gain: 1.0,
+        shifts: vec![0; n],
+    };
+    if shifts.len() > 1 {
+        for i in 0..n {
+            let (best, _) = best_of(
+                (0..shifts.len()).map(|s| {
+                    let mut trial = signals.clone();
+                    trial.shifts[i] = s;
+                    let score = held.score(plain, &active, &prior, DELAY_RIDGE, &trial);
+                    (s, score)
                 }),
+                0,
+            );
+            signals.shifts[i] = best;
+        }
+    }
+    let choose_ridge = |active: &[bool], signals: &Signals| -> (f64, f64) {
+        match settings.ridge {
+            Some(r) => (r, held.score(fitter, active, &prior, r, signals)),
+            None => {
+                let score = |r: f64| (r, held.score(fitter, active, &prior, r, signals));
+                let coarse = best_of(ridge_grid().map(score), f64::NAN);
+                if coarse.0.is_nan() {
+                    return coarse;
+                }
+                let half = 10f64.sqrt();
+                best_of(
+                    [coarse, score(coarse.0 / half), score(coarse.0 * half)].into_iter(),
+                    f64::NAN,
+                )
+            }
         }
     };
-    let (mut ridge, mut best) = choose_ridge(&active);
+    let (mut ridge, mut best) = choose_ridge(&active, &signals);
     let mut springs = vec![false; n];
-    if settings.springs {
+    if settings.springs && best.is_finite() {
         for i in 0..n {
             let mut trial = active.clone();
             (FIRST_SPRING_FEATURE..JOINT_FEATURES).for_each(|f| trial[joint_col(i, f)] = true);
-            let score = held.score(fitter, &trial, &prior, ridge);
+            let score = held.score(fitter, &trial, &prior, ridge, &signals);
             if score < 0.99 * best {
                 active = trial;
                 best = score;
@@ -181,7 +309,7 @@ pub fn identify(
             }
         }
         if springs.iter().any(|&s| s) {
-            (ridge, best) = choose_ridge(&active);
+            (ridge, best) = choose_ridge(&active, &signals);
         }
     }
     if !best.is_finite() {
@@ -205,43 +333,68 @@ pub fn identify(
         };
         Ok((x, impossible))
     };
-    let (x, projected) = fit(held.all_training())?;
+    let (x, projected) = fit(&held.all_training(&signals))?;
     let identified = Identification::from_solution(model, &x, width)?;
-    let (per_joint, held_out) = match &held {
-        Held::Recording { samples, .. } => (
-            identified.joint_errors(samples)?.rms,
-            "validation recording".to_string(),
-        ),
+    // The torques paired with the motion as the chosen delay pairs them, for the errors.
+    let shifted = |s: &Samples| -> Vec<f64> {
+        (0..s.len())
+            .flat_map(|k| (0..n).map(move |i| (k, i)))
+            .map(|(k, i)| shifted_torque(s, k, i, shifts[signals.shifts[i]]))
+            .collect()
+    };
+    // Held-out squared errors per candidate gain and joint, of models that never saw them.
+    let mut sq = vec![vec![0.0; n]; gains.len()];
+    let mut count = 0;
+    let mut add_errors = |id: &Identification, part: &Samples| -> Result<(), DynamicsError> {
+        for (g, &gain) in gains.iter().enumerate() {
+            let mut id = id.clone();
+            id.summary.acceleration_gain = gain;
+            let errs = id.joint_errors(part)?;
+            for (s, e) in sq[g].iter_mut().zip(&errs.rms) {
+                *s += e.powi(2) * part.len() as f64;
+            }
+        }
+        count += part.len();
+        Ok(())
+    };
+    let held_out = match &held {
+        Held::Recording { samples, .. } => {
+            let tau = shifted(samples);
+            add_errors(&identified, &Samples { tau: &tau, ..*samples })?;
+            "validation recording".to_string()
+        }
         Held::Folds { blocks, total } => {
-            // The reported error of each stretch comes from a fit that never saw it.
-            let mut sq = vec![0.0; n];
-            let mut count = 0;
-            for (b, normal) in blocks.iter().enumerate() {
+            let tau = shifted(train);
+            let train = Samples { tau: &tau, ..*train };
+            let total = total.at(signals.gain, &signals.shifts);
+            for (b, block) in blocks.iter().enumerate() {
                 let mut rest = total.clone();
-                rest.sub(normal);
+                rest.sub(&block.at(signals.gain, &signals.shifts));
                 let (xb, _) = fit(&rest)?;
                 let id = Identification::from_solution(model, &xb, width)?;
                 let (s, e) = (
                     b * train.len() / blocks.len(),
                     (b + 1) * train.len() / blocks.len(),
                 );
-                let part = train.slice(s, e);
-                let errs = id.joint_errors(&part)?;
-                for (s, e) in sq.iter_mut().zip(&errs.rms) {
-                    *s += e.powi(2) * part.len() as f64;
-                }
-                count += part.len();
+                add_errors(&id, &train.slice(s, e))?;
             }
-            let rms: Vec<f64> = sq.iter().map(|s| (s / count as f64).sqrt()).collect();
-            (
-                rms,
-                format!(
-                    "blocked cross-validation, {} contiguous stretches",
-                    blocks.len()
-                ),
+            format!(
+                "blocked cross-validation, {} contiguous stretches",
+                blocks.len()
             )
         }
     };
+    let (g, _) = best_of(
+        sq.iter()
+            .enumerate()
+            .map(|(g, s)| (g, s.iter().sum::<f64>())),
+        0,
+    );
+    let acceleration_gain = gains[g];
+    let per_joint: Vec<f64> = sq[g]
+        .iter()
+        .map(|s| (s / count.max(1) as f64).sqrt())
+        .collect();
     // The URDF's own error on the same held-out motion (it was fitted to nothing).
     let prior_model = Identification::from_solution(model, &prior, width)?;
     let prior_rms = match &held {
@@ -257,15 +410,47 @@ pub fn identify(
         expected_false_torque_rms: per_joint,
         prior_false_torque_rms: prior_rms,
         base_parameters: base.rank(),
-        condition_number: base_condition(&base, held.all_training()),
+        condition_number: base_condition(&base, &held.all_training(&signals)),
         training_samples: train.len(),
         validation_samples: validation.map_or(0, |v| v.len()),
         settings: settings.clone(),
+        input_filter_hz: 0.0,
+        delay_s: signals
+            .shifts
+            .iter()
+            .map(|&s| settings.sample_rate_hz.map_or(0.0, |rate| shifts[s] / rate))
+            .collect(),
+        step_response_s: 0.0,
+        acceleration_gain,
     };
     Ok(Identification {
         summary,
         ..identified
     })
+}
+
+/// Refuses samples that do not move the arm: a joint whose angle and velocity hardly
+/// change cannot be identified, and the fit would only return the URDF with an infinite
+/// condition number.
+fn check_motion(samples: &Samples, what: &str) -> Result<(), DynamicsError> {
+    let n = samples.dof;
+    for i in 0..n {
+        let (mut lo, mut hi, mut speed) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+        for k in 0..samples.len() {
+            let q = samples.q[k * n + i];
+            lo = lo.min(q);
+            hi = hi.max(q);
+            speed = speed.max(samples.qdot[k * n + i].abs());
+        }
+        if !(hi - lo > 1e-3 && speed > 1e-3) {
+            return Err(DynamicsError::InvalidArgument(format!(
+                "{what}: joint {i} does not move (range {:.2e} rad, top speed {speed:.2e} rad/s): \
+                 identification needs free motion of every joint (record an excitation: `admittance excite`)",
+                hi - lo
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Each joint's weight in the least squares: one over its residual rms after a plain

@@ -89,6 +89,42 @@ impl JointTerms {
         self.coefficients().iter().all(|c| *c == 0.0)
     }
 
+    /// Whether the terms are physically possible (issue 30): rotor inertia and viscous
+    /// friction not negative, and a dissipative friction curve: the narrow Coulomb level not
+    /// negative and the sum of both levels not negative, so that the friction torque opposes
+    /// the velocity at every speed (`F_c1 tanh(v/w) + F_c2 tanh(v/10w) >= (F_c1 + F_c2)
+    /// tanh(v/10w)` for `F_c2 < 0`: a Stribeck dip is allowed, a negative slope at rest is not).
+    pub fn is_physical(&self) -> bool {
+        self.is_valid()
+            && self.armature >= 0.0
+            && self.viscous >= 0.0
+            && self.coulomb[0] >= 0.0
+            && self.coulomb[0] + self.coulomb[1] >= 0.0
+    }
+
+    /// The first physical condition these terms break, as a phrase for an error message.
+    pub fn physical_problem(&self) -> Option<String> {
+        if !self.is_valid() {
+            return Some("a coefficient is not finite or the Coulomb width is not positive".into());
+        }
+        if self.armature < 0.0 {
+            return Some(format!("rotor inertia {} kg m^2 is negative", self.armature));
+        }
+        if self.viscous < 0.0 {
+            return Some(format!("viscous friction {} N m s/rad is negative", self.viscous));
+        }
+        if self.coulomb[0] < 0.0 {
+            return Some(format!("Coulomb level {} N m is negative", self.coulomb[0]));
+        }
+        if self.coulomb[0] + self.coulomb[1] < 0.0 {
+            return Some(format!(
+                "Coulomb levels {} + {} N m sum to a negative friction (not dissipative)",
+                self.coulomb[0], self.coulomb[1]
+            ));
+        }
+        None
+    }
+
     /// All coefficients finite and the width positive.
     pub(crate) fn is_valid(&self) -> bool {
         self.coefficients().iter().all(|v| v.is_finite())

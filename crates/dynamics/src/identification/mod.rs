@@ -22,17 +22,20 @@ mod file;
 mod fit;
 mod joint_terms;
 mod normal;
+mod payload;
 mod samples;
 mod settings;
 
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;
 pub use excitation::{
-    excitation, Excitation, ExcitationSettings, FourierSeries, LimitUse, DEFAULT_VELOCITY_LIMIT,
+    excitation, Excitation, ExcitationSettings, FourierSeries, LimitUse, DEFAULT_EXCITATION_RANGE,
+    DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT,
 };
 pub use file::{IdentificationFile, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION};
 pub use fit::identify;
 pub use joint_terms::JointTerms;
+pub use payload::identify_payload;
 pub use samples::Samples;
 pub use settings::IdentificationSettings;
 
@@ -82,6 +85,32 @@ pub struct IdentificationSummary {
     pub validation_samples: usize,
     /// The settings used.
     pub settings: IdentificationSettings,
+    /// Cut-off of the input conditioning (`InputConditioner`, docs/method.md section 7) the
+    /// samples went through before the fit (Hz; 0: the signals as recorded). Every consumer
+    /// conditions its inputs the same way.
+    #[serde(default)]
+    pub input_filter_hz: f64,
+    /// Per joint: how much later its torque signal is than the motion signals (s;
+    /// negative: earlier), chosen on held-out motion (empty: none). Consumers pair each
+    /// joint's torque with the motion this much older.
+    #[serde(default)]
+    pub delay_s: Vec<f64>,
+    /// 90 % step-response time of the conditioned estimate (s): the conditioning filter's
+    /// plus the delay; what the cut-off costs in reaction time.
+    #[serde(default)]
+    pub step_response_s: f64,
+    /// How much of the measured (conditioned) acceleration the prediction trusts, chosen
+    /// on held-out motion: a Wiener gain, 1 for clean accelerations, toward 0 where
+    /// differentiation noise swamps the inertial torque (a physical model cannot shrink its
+    /// inertia to absorb that noise, as a free least squares does with negative rotor
+    /// inertias). [`Identification::predict`] multiplies `q''` by it; the rigid-body model
+    /// itself is untouched (the momentum observer never uses `q''`).
+    #[serde(default = "unit_gain")]
+    pub acceleration_gain: f64,
+}
+
+fn unit_gain() -> f64 {
+    1.0
 }
 
 /// Per-joint rms errors of a model on samples.
@@ -150,8 +179,9 @@ impl Identification {
         })
     }
 
-    /// The torque the identified arm needs for `(q, q', q'')` (N m), into `out`: RNEA on
-    /// the identified model plus each joint's terms. Allocation-free.
+    /// The torque the identified arm needs for measured `(q, q', q'')` (N m), into `out`:
+    /// RNEA on the identified model plus each joint's terms, the measured acceleration
+    /// weighted by [`IdentificationSummary::acceleration_gain`]. Allocation-free.
     pub fn predict(
         &self,
         data: &mut Data,
@@ -160,10 +190,18 @@ impl Identification {
         qddot: &[f64],
         out: &mut [f64],
     ) -> Result<(), DimensionError> {
-        check_len("out", out, self.model.nq())?;
-        let tau = rnea(&self.model, data, q, qdot, qddot)?;
+        let n = self.model.nq();
+        check_len("out", out, n)?;
+        check_len("qddot", qddot, n)?;
+        let gain = self.summary.acceleration_gain;
+        // The gain goes through `out` as the acceleration buffer: no allocation.
+        for (o, a) in out.iter_mut().zip(qddot) {
+            *o = gain * a;
+        }
+        let tau = rnea(&self.model, data, q, qdot, out)?;
         for (i, o) in out.iter_mut().enumerate() {
-            *o = tau[i] + self.joint_terms[i].torque(q[i], qdot[i], qddot[i]);
+            let qdd = gain * qddot[i];
+            *o = tau[i] + self.joint_terms[i].torque(q[i], qdot[i], qdd);
         }
         Ok(())
     }
@@ -224,6 +262,10 @@ impl IdentificationSummary {
             training_samples: 0,
             validation_samples: 0,
             settings: IdentificationSettings::default(),
+            input_filter_hz: 0.0,
+            delay_s: Vec::new(),
+            step_response_s: 0.0,
+            acceleration_gain: 1.0,
         }
     }
 }

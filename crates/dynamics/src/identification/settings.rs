@@ -27,6 +27,13 @@ pub struct IdentificationSettings {
     /// Fit over physically possible bodies only (positive mass, positive definite inertia
     /// obeying the triangle inequalities: log-Cholesky coordinates). Default true.
     pub physical_consistency: bool,
+    /// How much of the measured acceleration the prediction trusts (0 to 1); `None`
+    /// (default): chosen on held-out motion (see `IdentificationSummary::acceleration_gain`).
+    pub acceleration_gain: Option<f64>,
+    /// The samples' rate (Hz). When given, the delay of the torque behind the motion (up to
+    /// 2 samples either way, in half samples) is chosen on held-out motion and stored as
+    /// `delay_s`; `None` (default): no delay.
+    pub sample_rate_hz: Option<f64>,
 }
 
 impl Default for IdentificationSettings {
@@ -38,6 +45,8 @@ impl Default for IdentificationSettings {
             folds: 5,
             ridge: None,
             physical_consistency: true,
+            acceleration_gain: None,
+            sample_rate_hz: None,
         }
     }
 }
@@ -70,6 +79,22 @@ impl IdentificationSettings {
                 return bad(
                     "ridge",
                     format!("is {r}, must be >= 0 (or absent: chosen on held-out motion)"),
+                );
+            }
+        }
+        if let Some(g) = self.acceleration_gain {
+            if !(0.0..=1.0).contains(&g) {
+                return bad(
+                    "acceleration_gain",
+                    format!("is {g}, must be 0 to 1 (or absent: chosen on held-out motion)"),
+                );
+            }
+        }
+        if let Some(r) = self.sample_rate_hz {
+            if !(r.is_finite() && r > 0.0) {
+                return bad(
+                    "sample_rate_hz",
+                    format!("is {r}, must be a positive number of Hz (or absent: no delay)"),
                 );
             }
         }

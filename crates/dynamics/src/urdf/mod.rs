@@ -68,10 +68,13 @@ impl UrdfOptions {
 /// Loads a model from a URDF file.
 pub(crate) fn load_file(path: &Path, options: &UrdfOptions) -> Result<Model, DynamicsError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| DynamicsError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let bytes =
+        admittance_files::read_regular(path, admittance_files::TEXT_LIMIT).map_err(|source| {
+            DynamicsError::Io {
+                file: file.clone(),
+                source,
+            }
+        })?;
     let text = xml::utf8_text(bytes, &file)?;
     load_str(&text, &file, options)
 }

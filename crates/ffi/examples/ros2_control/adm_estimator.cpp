@@ -14,7 +14,7 @@
 // What it claims: `<joint>/position` and `<joint>/effort` state interfaces of every joint
 // in `joints` (effort: the measured joint torque, which the learned observer was trained
 // on); no command interface. What it exports: the wrench the environment applies to the
-// hand, in the axes of the scenario's `[arm] tip` link (AdmOutput::wrench_tip), which is
+// hand, in the axes of the deployment's `[arm] tip` link (AdmOutput::wrench_tip), which is
 // admittance_controller's `ft_sensor.frame.id`.
 
 #include <array>
@@ -40,24 +40,21 @@ public:
 
   CallbackReturn on_init() override {
     auto_declare<std::vector<std::string>>("joints", {});
-    auto_declare<std::string>("scenario_path", "");
-    auto_declare<std::string>("variant", "");
+    auto_declare<std::string>("deployment_path", "");
     auto_declare<std::string>("sensor_name", "virtual_ft");
     return CallbackReturn::SUCCESS;
   }
 
-  // Not real-time: reads the scenario, loads the network, allocates.
+  // Not real-time: reads the deployment folder (admittance deploy), allocates.
   CallbackReturn on_configure(const rclcpp_lifecycle::State &) override {
     joints_ = get_node()->get_parameter("joints").as_string_array();
-    scenario_ = get_node()->get_parameter("scenario_path").as_string();
-    variant_ = get_node()->get_parameter("variant").as_string();
+    deployment_ = get_node()->get_parameter("deployment_path").as_string();
     sensor_ = get_node()->get_parameter("sensor_name").as_string();
     AdmConfig config;
     std::memset(&config, 0, sizeof config);
     config.abi_version = ADM_ABI_VERSION;
     config.n_joints = static_cast<uint32_t>(joints_.size());
-    config.scenario_path = scenario_.c_str();
-    config.variant = variant_.empty() ? nullptr : variant_.c_str();
+    config.deployment_path = deployment_.c_str();
     config.flags = ADM_CONFIG_WRENCH;
     adm_destroy(loop_);
     loop_ = adm_create(&config);
@@ -139,7 +136,7 @@ private:
   std::array<double, 6> wrench_{};
   double time_ = 0.0;
   std::vector<std::string> joints_;
-  std::string scenario_, variant_, sensor_;
+  std::string deployment_, sensor_;
 };
 
 }  // namespace admittance_ffi_examples

@@ -1,6 +1,7 @@
-// The C ABI from C++ (issue 24), compiled by g++ and linked with libadmittance_ffi.a by
-// run.sh beside this file. It replays the inputs the Rust reference program recorded
-// (examples/reference_run.rs: the Rust loop closed around the simulated arm) through
+// The C ABI from C++ (issues 24, 32), compiled by g++ and linked with libadmittance_ffi.a by
+// run.sh beside this file. It loads a deployment folder (`admittance deploy`), replays the
+// inputs the Rust reference program recorded (examples/reference_run.rs: the Rust loop of
+// the same folder fed a measured motion with a NaN burst and two absurd samples) through
 // adm_step and checks, for 100,000 steps:
 //   1. no allocation and no free between the first and the last step: malloc, calloc,
 //      realloc, free, posix_memalign, aligned_alloc, memalign and operator new/delete are
@@ -8,8 +9,10 @@
 //      adm_create are counted too, which shows the interposition sees them);
 //   2. every AdmOutput equals the Rust loop's byte for byte (memcmp), and every status
 //      agrees with its fault field;
-//   3. the error paths: a wrong joint count, null pointers, a bad scenario path.
-// Usage: loop_test SCENARIO VARIANT DATA_DIR (DATA_DIR holds inputs.bin and outputs.bin).
+//   3. the two absurd samples were flagged (ADM_OUT_IMPLAUSIBLE_INPUT) and counted;
+//   4. the error paths: a wrong joint count, null pointers, a missing deployment folder.
+// It prints adm_create's wall time (issue 32's bar: under 100 ms on a deployed folder).
+// Usage: loop_test DEPLOY_DIR DATA_DIR (DATA_DIR holds inputs.bin and outputs.bin).
 // Exit status 0 when every check passes, 1 with a message on stderr otherwise.
 
 #include "admittance.h"
@@ -112,8 +115,8 @@ static std::string last_error(const AdmHandle *h) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 4) return fail("usage: loop_test SCENARIO VARIANT DATA_DIR");
-    const std::string dir = argv[3];
+    if (argc != 3) return fail("usage: loop_test DEPLOY_DIR DATA_DIR");
+    const std::string dir = argv[2];
 
     // The interposition works: a malloc and a new of this program are counted.
     g_counting = true;
@@ -134,7 +137,7 @@ int main(int argc, char **argv) {
     if (!read_file(dir + "/inputs.bin", in_bytes) || !read_file(dir + "/outputs.bin", ref_bytes))
         return fail("cannot read " + dir + "/inputs.bin or outputs.bin (run reference_run first)");
     if (in_bytes.size() < 16 || std::memcmp(in_bytes.data(), "ADMIN001", 8) != 0 ||
-        ref_bytes.size() < 16 || std::memcmp(ref_bytes.data(), "ADMOUT01", 8) != 0)
+        ref_bytes.size() < 16 || std::memcmp(ref_bytes.data(), "ADMOUT02", 8) != 0)
         return fail("inputs.bin / outputs.bin: not reference_run's format");
     uint32_t n, steps;
     std::memcpy(&n, in_bytes.data() + 8, 4);
@@ -144,28 +147,30 @@ int main(int argc, char **argv) {
         ref_bytes.size() != 16 + steps * sizeof(AdmOutput))
         return fail("inputs.bin / outputs.bin: sizes do not match their headers");
 
-    // A bad scenario path: null handle, an error naming the file.
+    // A missing deployment folder: null handle, an error naming it.
     AdmConfig bad{};
     bad.abi_version = ADM_ABI_VERSION;
     bad.n_joints = n;
-    bad.scenario_path = "no/such/scenario.toml";
-    if (adm_create(&bad) != nullptr) return fail("adm_create accepted a missing scenario file");
-    if (last_error(nullptr).find("no/such/scenario.toml") == std::string::npos)
-        return fail("adm_last_error does not name the missing file: " + last_error(nullptr));
+    bad.deployment_path = "no/such/deployment";
+    if (adm_create(&bad) != nullptr) return fail("adm_create accepted a missing deployment folder");
+    if (last_error(nullptr).find("no/such/deployment") == std::string::npos)
+        return fail("adm_last_error does not name the missing folder: " + last_error(nullptr));
 
     AdmConfig config{};
     config.abi_version = ADM_ABI_VERSION;
     config.n_joints = n;
-    config.scenario_path = argv[1];
-    config.variant = argv[2];
+    config.deployment_path = argv[1];
     config.flags = ADM_CONFIG_WRENCH;
     std::vector<long long> step_ns(steps);  // allocated before counting
 
     g_allocs = 0;
     g_frees = 0;
     g_counting = true;
+    const auto c0 = std::chrono::steady_clock::now();
     AdmHandle *h = adm_create(&config);
+    const auto c1 = std::chrono::steady_clock::now();
     g_counting = false;
+    const double create_ms = std::chrono::duration<double, std::milli>(c1 - c0).count();
     const long create_allocs = g_allocs.load();
     if (!h) return fail("adm_create: " + last_error(nullptr));
     if (create_allocs == 0)
@@ -173,6 +178,7 @@ int main(int argc, char **argv) {
 
     // ---- the real-time loop: nothing allocates from here to the last step ----
     size_t mismatches = 0, first_mismatch = size_t(-1), status_errors = 0, faults = 0;
+    size_t implausible_flags = 0;
     AdmOutput out;
     g_allocs = 0;
     g_frees = 0;
@@ -198,6 +204,7 @@ int main(int argc, char **argv) {
         }
         if (status != (out.fault == ADM_FAULT_NONE ? ADM_OK : ADM_FAULT)) ++status_errors;
         faults += out.fault != ADM_FAULT_NONE;
+        implausible_flags += (out.flags & ADM_OUT_IMPLAUSIBLE_INPUT) != 0;
     }
     g_counting = false;
     const long loop_allocs = g_allocs.load(), loop_frees = g_frees.load();
@@ -218,11 +225,12 @@ int main(int argc, char **argv) {
 
     std::sort(step_ns.begin(), step_ns.end());
     std::printf(
-        "loop_test: %u steps of %u joints; allocations during adm_create %ld, during the loop "
-        "%ld (frees %ld); outputs bit-identical to Rust in %zu of %u steps (%zu with a "
-        "controller fault); adm_step wall time from C++: median %lld ns, 99th percentile "
-        "%lld ns, max %lld ns\n",
-        steps, n, create_allocs, loop_allocs, loop_frees, steps - mismatches, steps, faults,
+        "loop_test: %u steps of %u joints; adm_create %.1f ms with %ld allocations, during the "
+        "loop %ld (frees %ld); outputs bit-identical to Rust in %zu of %u steps (%zu with a "
+        "fault, %zu implausible samples flagged); adm_step wall time from C++: median %lld ns, "
+        "99th percentile %lld ns, max %lld ns\n",
+        steps, n, create_ms, create_allocs, loop_allocs, loop_frees, steps - mismatches, steps,
+        faults, implausible_flags,
         step_ns[steps / 2], step_ns[size_t(steps * 0.99)], step_ns[steps - 1]);
 
     if (loop_allocs != 0 || loop_frees != 0)
@@ -234,8 +242,12 @@ int main(int argc, char **argv) {
     if (status_errors != 0)
         return fail(std::to_string(status_errors) + " statuses disagree with their fault field");
     if (faults == 0) return fail("the reference sequence produced no controller fault to compare");
+    if (steps >= 40000 && (implausible_flags != 2 || out.implausible_samples != 2))
+        return fail("expected the 2 absurd samples flagged and counted, got " +
+                    std::to_string(implausible_flags) + " flags, count " +
+                    std::to_string(out.implausible_samples));
     if (!joints_ok) return fail("a wrong n_joints did not return ADM_ERR_JOINTS with the held output");
     if (!null_ok) return fail("a null pointer did not return ADM_ERR_NULL");
-    std::printf("loop_test: 6 passed, 0 failed\n");
+    std::printf("loop_test: 7 passed, 0 failed\n");
     return 0;
 }

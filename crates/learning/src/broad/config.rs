@@ -154,6 +154,12 @@ pub struct BroadConfig {
     /// alone. Off by default (the paper's network has no such fallback).
     #[serde(default)]
     pub zero_unhelpful_outputs: bool,
+    /// Set every output to zero: the caller has no recording of other motion to judge the
+    /// outputs on (blocked cross-validation over one recording, or its tail, holds motion
+    /// the fit has seen: issue 30). For a residual on a nominal model the network then
+    /// adds nothing and the nominal model stands alone. Off by default.
+    #[serde(default)]
+    pub zero_all_outputs: bool,
     /// Rows per block when accumulating the Gram matrix (never the whole N x P pattern);
     /// capped at 256 on the packed AVX2 path, where larger blocks would leave the cache.
     pub block_rows: usize,
@@ -179,6 +185,7 @@ impl Default for BroadConfig {
             lambda_grid: vec![1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2],
             cv_folds: default_cv_folds(),
             zero_unhelpful_outputs: false,
+            zero_all_outputs: false,
             block_rows: 2048,
             threads: 0,
             gram_strategy: GramStrategy::PerThread,
@@ -203,6 +210,11 @@ impl BroadConfig {
 
     pub(crate) fn validate(&self, d_in: usize) -> Result<(), BroadError> {
         self.friction.validate(d_in)?;
+        if self.nodes == 0 {
+            return Err(BroadError::Config(
+                "nodes must be a positive integer (Gaussian enhancement nodes)".into(),
+            ));
+        }
         if self.block_rows == 0 {
             return Err(BroadError::Config("block_rows must be > 0".into()));
         }

@@ -56,9 +56,41 @@ pub(crate) fn coverage_threshold(
             });
         }
     });
+    threshold_of_maxima(&mut m)
+}
+
+/// The coverage threshold from the largest activation of every training row (any order;
+/// reordered in place): the [`COVERAGE_QUANTILE`] quantile, `None` when it underflows.
+pub(crate) fn threshold_of_maxima(m: &mut [f64]) -> Option<f64> {
+    let n = m.len();
+    if n == 0 {
+        return None;
+    }
     let k = ((n - 1) as f64 * COVERAGE_QUANTILE).floor() as usize;
     let (_, q, _) = m.select_nth_unstable_by(k, f64::total_cmp);
     (*q >= MIN_THRESHOLD && q.is_finite()).then_some(*q)
+}
+
+/// Appends to `out` the largest Gaussian activation of each pattern column of `at`
+/// (column-major, `fm.width()` rows): [`max_activation`] of each, kept in eight running
+/// maxima so that the loop vectorises (a single `fold` is one serial chain
+/// of compares); the maximum of the activations (never NaN) does not depend on the order.
+pub(crate) fn push_max_activations(fm: &FeatureMap, at: &[f64], out: &mut Vec<f64>) {
+    const W: usize = 8;
+    let p = fm.width();
+    let g0 = fm.gauss_offset();
+    out.extend(at.chunks_exact(p.max(1)).map(|column| {
+        let gauss = &column[g0..];
+        let mut acc = [0.0f64; W];
+        let mut blocks = gauss.chunks_exact(W);
+        for b in &mut blocks {
+            for l in 0..W {
+                acc[l] = if b[l] > acc[l] { b[l] } else { acc[l] };
+            }
+        }
+        let tail = blocks.remainder().iter().fold(0.0f64, |m, &v| m.max(v));
+        acc.iter().fold(tail, |m, &v| m.max(v))
+    }));
 }
 
 /// `c^2 (3 - 2 c)` for c in [0, 1].

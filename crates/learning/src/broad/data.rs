@@ -82,6 +82,32 @@ impl<'a> Dataset<'a> {
         })
     }
 
+    /// Refuses data whose every input column is constant (its range within 1e-12 of its
+    /// magnitude, the [`Standardiser`]'s guard): a recording without motion.
+    pub fn check_motion(&self, what: &'static str) -> Result<(), BroadError> {
+        let d = self.d_in;
+        let mut rows = self.inputs.chunks_exact(d);
+        let Some(first) = rows.next() else {
+            return Err(BroadError::Empty { what });
+        };
+        let (mut lo, mut hi) = (first.to_vec(), first.to_vec());
+        for r in rows {
+            for ((l, h), &x) in lo.iter_mut().zip(hi.iter_mut()).zip(r) {
+                *l = l.min(x);
+                *h = h.max(x);
+            }
+        }
+        let moving = lo
+            .iter()
+            .zip(&hi)
+            .any(|(&l, &h)| h - l > 1e-12 * l.abs().max(h.abs()).max(1.0));
+        if moving {
+            Ok(())
+        } else {
+            Err(BroadError::NoMotion { what })
+        }
+    }
+
     /// Number of rows N.
     pub fn n_samples(&self) -> usize {
         self.n_samples

@@ -5,7 +5,7 @@
 use super::error::BroadError;
 use super::io::MAGIC;
 use super::model::BroadModel;
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 fn refuse(path: &Path, reason: impl Into<String>) -> BroadError {
@@ -130,53 +130,14 @@ pub fn check_model_destination(path: &Path) -> Result<PathBuf, BroadError> {
     }
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder is written,
-/// flushed and fsync'ed, then renamed over `path` (and the folder fsync'ed).
+/// Writes `bytes` to `path` atomically and exclusively (`admittance_files::write_atomic`: a
+/// temporary file with an unpredictable name in the same folder, created with `O_EXCL` and
+/// `O_NOFOLLOW`, fsync'ed, renamed over `path`).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), BroadError> {
-    let io_err = |p: &Path, e: std::io::Error| BroadError::Io {
-        path: p.to_path_buf(),
+    admittance_files::write_atomic(path, bytes).map_err(|e| BroadError::Io {
+        path: path.to_path_buf(),
         source: e,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| refuse(path, "not a file path"))?;
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.subsec_nanos())
-        .unwrap_or(0);
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        file_name.to_string_lossy(),
-        std::process::id(),
-        nanos
-    ));
-    let write = || -> Result<(), std::io::Error> {
-        let mut f = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
-        f.write_all(bytes)?;
-        f.flush()?;
-        f.sync_all()?;
-        Ok(())
-    };
-    if let Err(e) = write() {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_err(&tmp, e));
-    }
-    if let Err(e) = std::fs::rename(&tmp, path) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_err(path, e));
-    }
-    // Make the rename durable; not every platform can open a folder, so best effort.
-    if let Ok(d) = std::fs::File::open(&dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
+    })
 }
 
 impl BroadModel {

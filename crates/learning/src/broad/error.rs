@@ -24,6 +24,13 @@ pub enum BroadError {
         /// Which data set.
         what: &'static str,
     },
+    /// Every input column is constant (no motion): nothing can be learnt or validated, and
+    /// an error relative to a target that does not vary is meaningless.
+    #[error("{what}: every input column is constant (no motion in the recording); record the arm moving (e.g. `admittance excite`)")]
+    NoMotion {
+        /// Which data set.
+        what: &'static str,
+    },
     /// A non-finite value (NaN or infinity) in a data set or an input vector.
     #[error("non-finite value {value} in {what}, row {row}, column {column}")]
     NonFinite {

@@ -97,7 +97,7 @@ pub(crate) struct BlockScratch {
     xs: Option<Slab>,
 }
 
-/// Per-worker scratch of [`FeatureMap::fill_slab`].
+/// Per-worker scratch of [`FeatureMap::fill_slab_observed`].
 #[derive(Debug, Default)]
 pub(crate) struct SlabScratch {
     block: BlockScratch,
@@ -263,13 +263,17 @@ impl FeatureMap {
     /// into a packed slab of P + d_out rows: formed 24 samples at a time in `chunk`
     /// (about 200 KB at P = 1043, so it stays in L2 until it is packed), never as a
     /// whole block. The values are those of [`fill_block`](Self::fill_block).
-    pub(crate) fn fill_slab(
+    ///
+    /// Each chunk of pattern columns (column-major, P x c, in sample order) is handed to
+    /// `observe` while it is in cache.
+    pub(crate) fn fill_slab_observed(
         &self,
         x_rows: &[f64],
         y_rows: &[f64],
         d_out: usize,
         slab: &mut Slab,
         scratch: &mut SlabScratch,
+        mut observe: impl FnMut(&[f64]),
     ) {
         const CHUNK: usize = 24;
         let d = self.d_in();
@@ -289,6 +293,7 @@ impl FeatureMap {
                 &mut scratch.block,
                 Par::Seq,
             );
+            observe(chunk);
             slab.write_chunk(chunk, p, s0, c, &y_rows[s0 * d_out..], d_out);
             s0 += c;
         }
@@ -365,7 +370,7 @@ mod tests {
         }
     }
 
-    /// `fill_slab` (24-sample chunks written into the slab) holds exactly the block that
+    /// `fill_slab_observed` (24-sample chunks written into the slab) holds exactly the block that
     /// `fill_block` forms, packed with its targets, for block sizes around the chunk.
     #[test]
     fn fill_slab_equals_the_packed_block() {
@@ -377,7 +382,7 @@ mod tests {
         for b in [1usize, 23, 24, 25, 49, 80] {
             let x: Vec<f64> = (0..b * d).map(|i| (i as f64 * 0.613).sin() * 1.7).collect();
             let y: Vec<f64> = (0..b * d_out).map(|i| (i as f64 * 0.29).cos()).collect();
-            fm.fill_slab(&x, &y, d_out, &mut slab, &mut scratch);
+            fm.fill_slab_observed(&x, &y, d_out, &mut slab, &mut scratch, |_| {});
             let mut at = vec![0.0; p * b];
             fm.fill_block(&x, &mut at, &mut BlockScratch::default(), Par::Seq);
             let mut packed = Slab::new(p + d_out, 80);

@@ -144,6 +144,7 @@ pub fn fit(
 ) -> Result<(BroadModel, FitReport), BroadError> {
     let t0 = Instant::now();
     config.validate(train.d_in())?;
+    train.check_motion("training data")?;
     if let Some(v) = validation {
         check_same_widths(train, v)?;
     }
@@ -308,15 +309,20 @@ fn fit_inner(
         mut validation_nrmse,
         mut validation_rmse,
     } = choice;
-    let zeroed_outputs = if config.zero_unhelpful_outputs {
+    let zeroed_outputs = if config.zero_unhelpful_outputs || config.zero_all_outputs {
         let zero_rms = match validation {
             Some(v) if cv_folds == 0 => target_rms(v),
             _ if cv_folds > 0 => acc_rms(&acc, n),
             _ => Vec::new(),
         };
-        let zeroed = unhelpful_outputs(&validation_rmse, &zero_rms);
+        let zeroed = if config.zero_all_outputs {
+            (0..d_out).collect()
+        } else {
+            unhelpful_outputs(&validation_rmse, &zero_rms)
+        };
         // The expected error of a zeroed output is that of predicting zero.
-        for &o in &zeroed {
+        let known = zero_rms.len().min(validation_rmse.len());
+        for &o in zeroed.iter().filter(|&&o| o < known) {
             if validation_rmse[o] > 0.0 {
                 validation_nrmse[o] *= zero_rms[o] / validation_rmse[o];
             }

@@ -12,6 +12,7 @@
 //! matmul.
 
 use super::config::GramStrategy;
+use super::coverage::push_max_activations;
 use super::data::Dataset;
 use super::features::{BlockScratch, FeatureMap, SlabScratch};
 use super::kernels::syrk::{self, Store};
@@ -147,7 +148,7 @@ fn on_ranges<S: Send>(
 }
 
 /// The packed path's pass: runs `consume` on the `[pattern | targets]` slab (P + d_out
-/// rows, see [`FeatureMap::fill_slab`]) of every block of at most `slab_rows` samples
+/// rows, see [`FeatureMap::fill_slab_observed`]) of every block of at most `slab_rows` samples
 /// (capped at `syrk::KC`), the rows cut between `threads` workers as in the `PerThread`
 /// strategy of [`for_each_block`], each with its own state (from `init`). Each block is
 /// formed straight into the slab, never as a column-major block: that saves a 4 MB
@@ -160,6 +161,29 @@ fn for_each_slab<S: Send>(
     init: impl Fn() -> S + Sync,
     consume: impl Fn(&mut S, &syrk::Slab, &[f64]) + Sync,
 ) -> Vec<S> {
+    for_each_slab_observed(
+        fm,
+        data,
+        slab_rows,
+        threads,
+        false,
+        init,
+        |s, slab, y, _| consume(s, slab, y),
+    )
+}
+
+/// [`for_each_slab`], with the largest Gaussian activation of each row of the block
+/// (`coverage::push_max_activations`, taken from the pattern while it is formed) handed to
+/// `consume` when `maxima` (an empty slice otherwise).
+fn for_each_slab_observed<S: Send>(
+    fm: &FeatureMap,
+    data: &Dataset<'_>,
+    slab_rows: usize,
+    threads: usize,
+    maxima: bool,
+    init: impl Fn() -> S + Sync,
+    consume: impl Fn(&mut S, &syrk::Slab, &[f64], &[f64]) + Sync,
+) -> Vec<S> {
     let n = data.n_samples();
     let d_out = data.d_out();
     let slab_rows = slab_rows.clamp(1, syrk::KC);
@@ -167,12 +191,25 @@ fn for_each_slab<S: Send>(
     let run_range = |start: usize, end: usize, state: &mut S| {
         let mut slab = syrk::Slab::new(fm.width() + d_out, slab_rows);
         let mut scratch = SlabScratch::default();
+        let mut block_max = Vec::with_capacity(if maxima { slab_rows } else { 0 });
         let mut r = start;
         while r < end {
             let b = slab_rows.min(end - r);
             let y_rm = data.target_rows(r, b);
-            fm.fill_slab(data.input_rows(r, b), y_rm, d_out, &mut slab, &mut scratch);
-            consume(state, &slab, y_rm);
+            block_max.clear();
+            fm.fill_slab_observed(
+                data.input_rows(r, b),
+                y_rm,
+                d_out,
+                &mut slab,
+                &mut scratch,
+                |chunk| {
+                    if maxima {
+                        push_max_activations(fm, chunk, &mut block_max);
+                    }
+                },
+            );
+            consume(state, &slab, y_rm, &block_max);
             r += b;
         }
     };
@@ -345,6 +382,11 @@ fn gram_pass(
 /// is not stored) but only the k new rows of the Gram are multiplied: 2 N P' k flops
 /// instead of N P'^2 for a full retrain. Accumulated transposed, `[A | Y]^T A_new`
 /// ((P' + d_out) x k, Y as extra rows on the packed path), the packed kernel's layout.
+///
+/// With `maxima`, also the largest Gaussian activation of every row of `data` under the
+/// grown node set (in no particular order), for the coverage threshold
+/// (`coverage::threshold_of_maxima`), taken from the pattern this pass forms anyway
+/// instead of a second pass; empty otherwise.
 pub(crate) fn accumulate_new_rows(
     fm: &FeatureMap,
     data: &Dataset<'_>,
@@ -352,10 +394,26 @@ pub(crate) fn accumulate_new_rows(
     block_rows: usize,
     threads: usize,
     strategy: GramStrategy,
-) -> (Mat<f64>, Mat<f64>) {
-    new_rows_pass(fm, data, k, block_rows, threads, strategy, true)
+    maxima: bool,
+) -> NewRows {
+    new_rows_pass(fm, data, k, block_rows, threads, strategy, true, maxima)
 }
 
+/// What [`accumulate_new_rows`] returns.
+pub(crate) struct NewRows {
+    /// `A_new^T [A_old | A_new]`, k x P'.
+    pub rows: Mat<f64>,
+    /// `A_new^T Y`, k x d_out.
+    pub aty: Mat<f64>,
+    /// Largest activation of each row (when asked for).
+    pub maxima: Vec<f64>,
+}
+
+/// One worker's share of [`new_rows_pass`]: the transposed cross terms, `A_new^T Y`
+/// (faer path) and the row maxima.
+type NewRowsPart = (Vec<f64>, Mat<f64>, Vec<f64>);
+
+#[allow(clippy::too_many_arguments)]
 fn new_rows_pass(
     fm: &FeatureMap,
     data: &Dataset<'_>,
@@ -364,23 +422,26 @@ fn new_rows_pass(
     threads: usize,
     strategy: GramStrategy,
     allow_simd: bool,
-) -> (Mat<f64>, Mat<f64>) {
+    maxima: bool,
+) -> NewRows {
     let p = fm.width();
     let p_old = p - k;
     let d_out = data.d_out();
     let simd = simd_rows(block_rows, threads, strategy, allow_simd);
     let n = if simd.is_some() { p + d_out } else { p };
-    let init = || (vec![0.0; n * k], Mat::<f64>::zeros(k, d_out));
-    let parts = match simd {
-        Some(rows) => for_each_slab(
+    let init = || -> NewRowsPart { (vec![0.0; n * k], Mat::<f64>::zeros(k, d_out), Vec::new()) };
+    let parts: Vec<NewRowsPart> = match simd {
+        Some(rows) => for_each_slab_observed(
             fm,
             data,
             rows,
             threads,
+            maxima,
             || (init(), syrk::Slab::new(k, rows.clamp(1, syrk::KC))),
-            |((cross, _), new), all, _| {
+            |((cross, _, max), new), all, _, block_max| {
                 new.copy_rows(all, p_old);
                 syrk::gemm_nt(cross, n, all, new, Store::Add);
+                max.extend_from_slice(block_max);
             },
         )
         .into_iter()
@@ -393,7 +454,7 @@ fn new_rows_pass(
             threads,
             strategy,
             init,
-            |(cross, aty), block, par| {
+            |(cross, aty, max), block, par| {
                 let new_t = block.at.subrows(p_old, k);
                 matmul(
                     MatMut::from_column_major_slice_mut(cross, n, k),
@@ -404,12 +465,21 @@ fn new_rows_pass(
                     par,
                 );
                 matmul(aty.as_mut(), Accum::Add, new_t, block.y, 1.0, par);
+                if maxima {
+                    let g0 = fm.gauss_offset();
+                    for s in 0..block.at.ncols() {
+                        let col = block.at.col(s);
+                        max.push((g0..p).fold(0.0f64, |m, i| m.max(col[i])));
+                    }
+                }
             },
         ),
     };
     let mut rows = Mat::<f64>::zeros(k, p);
     let mut aty = Mat::<f64>::zeros(k, d_out);
-    for (cross, a) in &parts {
+    let mut all_max = Vec::with_capacity(if maxima { data.n_samples() } else { 0 });
+    for (cross, a, max) in &parts {
+        all_max.extend_from_slice(max);
         let c = MatRef::from_column_major_slice(cross, n, k);
         rows += c.subrows(0, p).transpose();
         if n > p {
@@ -418,7 +488,11 @@ fn new_rows_pass(
             aty += a;
         }
     }
-    (rows, aty)
+    NewRows {
+        rows,
+        aty,
+        maxima: all_max,
+    }
 }
 
 /// Sums of squared prediction errors on `data` for several weight matrices at once:
@@ -583,7 +657,7 @@ mod tests {
                     Mat::<f64>::from_fn(p, p, |i, j| if i >= j { acc.g[(i, j)] } else { 0.0 });
                 assert_close(lower.as_ref(), &g, &g_scale, &format!("{what} G"));
                 assert_close(acc.aty.as_ref(), &aty, &aty_scale, &format!("{what} A^T Y"));
-                let (r, ra) = new_rows_pass(
+                let new = new_rows_pass(
                     &fm,
                     &data,
                     k_new,
@@ -591,7 +665,21 @@ mod tests {
                     threads,
                     GramStrategy::PerThread,
                     allow_simd,
+                    true,
                 );
+                let (r, ra) = (&new.rows, &new.aty);
+                // The row maxima: every row once, each the largest activation of its
+                // pattern row.
+                let mut got = new.maxima.clone();
+                let mut want: Vec<f64> = (0..n)
+                    .map(|s| (p - l..p).fold(0.0f64, |m, i| m.max(a(s, i))))
+                    .collect();
+                got.sort_by(f64::total_cmp);
+                want.sort_by(f64::total_cmp);
+                assert_eq!(got.len(), n, "{what} row maxima");
+                for (g, w) in got.iter().zip(&want) {
+                    assert!((g - w).abs() <= 1e-12 * w, "{what} row maxima: {g} vs {w}");
+                }
                 assert_close(
                     r.as_ref(),
                     &rows,

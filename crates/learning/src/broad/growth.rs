@@ -4,11 +4,11 @@
 use super::budget::{check_budget, FitSize};
 use super::centres::{compute_widths, kmeanspp, rng_from_seed, subsample_standardised};
 use super::config::BroadConfig;
-use super::coverage::coverage_threshold;
+use super::coverage::threshold_of_maxima;
 use super::data::{Dataset, Standardiser};
 use super::error::BroadError;
 use super::features::{FeatureMap, NodeSet};
-use super::gram::accumulate_new_rows;
+use super::gram::{accumulate_new_rows, NewRows};
 use super::model::{check_finite_result, par_for, train_nrmse, BroadModel, GrowthState};
 use super::provenance::{CentreSettings, GrowthRecord};
 use super::solve::{extend_factor, solve};
@@ -124,13 +124,19 @@ impl BroadModel {
         );
 
         let t = Instant::now();
-        let (rows, aty_new) = accumulate_new_rows(
+        let with_coverage = self.coverage_threshold.is_some();
+        let NewRows {
+            rows,
+            aty: aty_new,
+            maxima: mut row_maxima,
+        } = accumulate_new_rows(
             &fm,
             train,
             k,
             config.block_rows,
             threads,
             config.gram_strategy,
+            with_coverage,
         );
         let cross_terms_s = t.elapsed().as_secs_f64();
 
@@ -179,8 +185,10 @@ impl BroadModel {
             },
         });
         self.fm = fm;
-        if self.coverage_threshold.is_some() {
-            self.coverage_threshold = coverage_threshold(&self.fm, train, config.thread_count());
+        if with_coverage {
+            // From the grown pattern rows of the pass above (the retrain's threshold, up to
+            // the rounding of the distance product).
+            self.coverage_threshold = threshold_of_maxima(&mut row_maxima);
         }
         self.state = Some(new_state);
         self.set_weights(w.as_ref());

@@ -160,12 +160,27 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<(Header, usize), BroadError
     Ok((header, h_end))
 }
 
+/// The largest input, output or node count a model file may state (an arm's network has
+/// tens of inputs and hundreds to thousands of nodes).
+const MAX_DIMENSION: u64 = 100_000;
+
 /// Array names and lengths (values), in file order.
 type ArrayList = Vec<(&'static str, u64)>;
 
 /// The arrays the header's dimensions call for, in file order (the header's own list
 /// must agree), and the pattern width P.
 fn expected_arrays(header: &Header) -> Result<(ArrayList, u64), String> {
+    for (name, v) in [
+        ("d_in", header.d_in),
+        ("d_out", header.d_out),
+        ("nodes", header.nodes),
+    ] {
+        if v > MAX_DIMENSION {
+            return Err(format!(
+                "corrupted header: {name} = {v} is beyond the {MAX_DIMENSION} a model file may have"
+            ));
+        }
+    }
     let f = header.friction_columns.len() as u64;
     let mul = |a: u64, b: u64| a.checked_mul(b);
     let too_big = || "corrupted header: dimensions overflow".to_string();
@@ -393,10 +408,13 @@ impl BroadModel {
     /// error naming the file and the problem.
     pub fn load(path: impl AsRef<Path>) -> Result<BroadModel, BroadError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| BroadError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        })?;
+        let bytes =
+            admittance_files::read_regular(path, admittance_files::DATA_LIMIT).map_err(|e| {
+                BroadError::Io {
+                    path: path.to_path_buf(),
+                    source: e,
+                }
+            })?;
         Self::from_bytes(&bytes, path)
     }
 

@@ -150,3 +150,29 @@ fn an_output_that_does_not_beat_zero_on_unseen_rows_is_set_to_zero() {
         assert!(report.validation_rmse[1] <= plain.validation_rmse[1] * 1.5);
     }
 }
+
+/// Without a recording of other motion (`zero_all_outputs`, set by the callers when a
+/// residual has only cross-validation over its own recording): every output is zero, the
+/// learnable one too, and the expected error is that of predicting zero.
+#[test]
+fn zero_all_outputs_leaves_the_nominal_model_alone() {
+    let (x, y) = data(1000, 5, 0.0);
+    let train = Dataset::new(&x, &y, 3, 2).unwrap();
+    let config = BroadConfig {
+        zero_unhelpful_outputs: true,
+        zero_all_outputs: true,
+        ..cv_config()
+    };
+    let (net, report) = fit(&train, None, &config).unwrap();
+    assert_eq!(report.zeroed_outputs, vec![0, 1], "{report:?}");
+    let mut out = vec![0.0; 2 * 1000];
+    net.predict_batch(&x, &mut out).unwrap();
+    assert!(out.iter().all(|&v| v == 0.0));
+    let (_, plain) = fit(&train, None, &cv_config()).unwrap();
+    assert!(plain.validation_nrmse[0] < 0.5, "{plain:?}");
+    assert!(report.validation_nrmse[0] > 0.9, "{report:?}");
+    assert_eq!(
+        net.provenance().fit.as_ref().unwrap().zeroed_outputs,
+        vec![0, 1]
+    );
+}

@@ -45,6 +45,16 @@ fn ridge_growth_equals_full_retrain_explicit_nodes() {
     for (a, b) in report.train_nrmse.iter().zip(&e_grown) {
         assert!((a - b).abs() < 1e-6 * b.max(1e-3), "{a} vs {b}");
     }
+    // The coverage threshold, taken from the growth's own pass over the data, is the
+    // retrain's (which makes a pass of its own).
+    let (grown_m0, retrained_m0) = (
+        model.coverage_threshold().expect("grown threshold"),
+        retrained.coverage_threshold().expect("retrained threshold"),
+    );
+    assert!(
+        (grown_m0 - retrained_m0).abs() <= 1e-12 * retrained_m0,
+        "coverage threshold {grown_m0} after growth, {retrained_m0} retrained"
+    );
 }
 
 #[test]

@@ -11,5 +11,6 @@ mod broad_growth;
 mod broad_identity;
 mod broad_io;
 mod broad_limits;
+mod broad_refusals;
 mod rbf_layer;
 mod rbf_props;

@@ -15,8 +15,11 @@ import numpy as np
 import numpy.typing as npt
 
 ArrayLike = npt.ArrayLike
-Vector = npt.NDArray[np.float64]
-Matrix = npt.NDArray[np.float64]
+
+#: The signal chain's low-pass cut-off (Hz) every front end defaults to (crates/loop).
+DEFAULT_SIGNAL_CUTOFF_HZ: float
+Vector = npt.Vector
+Matrix = npt.Vector
 StrPath = Union[str, "PathLike[str]"]
 Config = Mapping[str, Any]
 #: Free-motion data: a CSV path, or a dict with ``t`` ``(N,)`` and ``q``, ``qdot``, ``qddot``,
@@ -260,6 +263,23 @@ class InputConditioner:
     def n(self) -> int:
         """Number of joints."""
 
+class EstimateLowPass:
+    """The estimate's first-order low-pass of the loop (``observer.cutoff_hz``): ``y += alpha
+    (x - y)`` per joint from rest, ``alpha = dt / (dt + 1 / (2 pi cutoff_hz))`` at
+    ``rate_hz``; 0 passes the estimate through."""
+
+    def __init__(self, n: int, cutoff_hz: float, rate_hz: float) -> None: ...
+    def update(self, raw: ArrayLike) -> Vector:
+        """One sample of the raw estimate ``(n,)``; returns the filtered estimate."""
+    def filter(self, raw: ArrayLike) -> Matrix:
+        """The rows of ``raw`` ``(N, n)`` in order, continuing from the filter's state;
+        returns the filtered ``(N, n)``."""
+    def reset(self) -> None:
+        """Back to rest (zero)."""
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+
 class Admittance:
     """The admittance model ``M_d (q_a'' - q_d'') + C_d (q_a' - q_d') + G_d (q_a - q_d) =
     tau_ext_hat`` with the smooth saturation of the reference.
@@ -279,6 +299,7 @@ class Admittance:
         mass: Optional[Union[float, ArrayLike]] = None,
         rho: Optional[float] = 0.95,
         bound: Optional[Union[float, ArrayLike]] = None,
+        deadband: Optional[Union[float, ArrayLike]] = None,
     ) -> None: ...
     @staticmethod
     def from_config(m: Model, config: Config) -> "Admittance":
@@ -313,9 +334,33 @@ class Admittance:
     def fault_count(self) -> int:
         """Steps that faulted since construction or ``reset``."""
 
+class RobotLoop:
+    """The robot's loop of a deployment folder (``admittance deploy``): the loop the C ABI's
+    ``adm_create`` builds. Raw measured angles and torques in, through the plausibility gates
+    and the signal chain; command, estimate, reference and a status out. Never trains."""
+    @staticmethod
+    def load(path: str, overrides: Optional[List[str]] = None, *, wrench: bool = False) -> "RobotLoop": ...
+    def step(self, t: float, q: ArrayLike, tau: Optional[ArrayLike] = None, *, qdot: Optional[ArrayLike] = None,
+             q_d: Optional[ArrayLike] = None, qdot_d: Optional[ArrayLike] = None,
+             qddot_d: Optional[ArrayLike] = None) -> Tuple[Vector, Vector]: ...
+    @property
+    def status(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def implausible_samples(self) -> int: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def joints(self) -> List[str]: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def reference(self) -> Tuple[Vector, Vector, Vector]: ...
+    @property
+    def wrench(self) -> Optional[Tuple[Vector, Vector]]: ...
+
 class ClosedLoop:
     """One control period of the Rust loop (``admittance_loop::ClosedLoop``): the encoder
-    angles through the sensors' low-pass and differentiation (``sensor_cutoff_hz``, 0: none),
+    angles through the sensors' low-pass and differentiation (``sensor_cutoff_hz``, default ``DEFAULT_SIGNAL_CUTOFF_HZ``; 0: none),
     the observer stage (input conditioning, estimate low-pass, warm-up), the admittance model
     and the controller, exactly as a scenario's variant runs them.
 
@@ -331,7 +376,7 @@ class ClosedLoop:
         config: Config,
         network: Optional["Network"] = None,
         *,
-        sensor_cutoff_hz: float = 0.0,
+        sensor_cutoff_hz: float = 20.0,
     ) -> None: ...
     def step(
         self,
@@ -464,8 +509,8 @@ class Network:
         """Adds ``nodes`` nodes without retraining; ``data`` must be the training data. Options
         default to how the network was trained. Releases the GIL."""
     def predict(
-        self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike, *, out: Optional[npt.NDArray[np.float64]] = None
-    ) -> npt.NDArray[np.float64]:
+        self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike, *, out: Optional[npt.Vector] = None
+    ) -> npt.Vector:
         """The output for ``(n,)`` inputs (returns ``(n,)``) or ``(N, n)`` inputs (returns
         ``(N, n)``)."""
     def save(self, path: StrPath) -> None:
@@ -509,7 +554,7 @@ def train(
     *,
     friction_features: bool = False,
     friction_scales: Optional[Sequence[float]] = None,
-    input_filter_hz: float = 0.0,
+    input_filter_hz: Optional[float] = None,
     validation_fraction: Optional[float] = None,
     validation: Optional[FreeMotionData] = None,
     folds: int = 5,
@@ -523,7 +568,9 @@ def train(
     stretches of the rows (each scored by a fit on the others), chooses the ridge parameter
     and gives ``validation_nrmse``; every row of ``data`` trains. ``validation_fraction``:
     hold out the last rows instead (the tail of the same motion; compatibility only). ``nominal``: learn the hybrid observer's
-    residual ``tau - RNEA_nominal`` instead of ``tau``. Releases the GIL."""
+    residual ``tau - RNEA_nominal`` instead of ``tau``; without ``validation`` (a recording of other
+    motion) every output is zero and a warning says why. ``input_filter_hz``: default the nominal
+    identification's conditioning (another value is an error), else 0. Releases the GIL."""
 
 def load_network(path: StrPath) -> Network:
     """Loads a network written by ``Network.save`` or ``admittance train``."""
@@ -547,6 +594,30 @@ class Identification:
         """The torque the identified arm needs: ``(n,)`` or ``(N, n)`` rows."""
     def save(self, path: StrPath, data: Optional[str] = None) -> None:
         """Writes the identification file (JSON, versioned, checksummed, atomic)."""
+    def with_payload(self, payload: "Payload") -> "Identification":
+        """This identification carrying ``payload`` rigidly at the tip frame (its inertia
+        added to the last body); ``save`` records the payload in the file's ``data``."""
+
+class Payload:
+    """A rigid payload at the tip frame: ``mass`` (kg), ``com`` (m, tip frame), ``inertia``
+    (3 x 3, kg m^2, about the centre of mass, tip axes)."""
+
+    def __init__(self, mass: float, com: ArrayLike, inertia: Optional[ArrayLike] = None) -> None: ...
+    @property
+    def mass(self) -> float:
+        """Mass (kg)."""
+    @property
+    def com(self) -> Vector:
+        """Centre of mass in the tip frame (m), ``(3,)``."""
+    @property
+    def inertia(self) -> Matrix:
+        """Rotational inertia about the centre of mass, tip axes (kg m^2), ``(3, 3)``."""
+
+def identify_payload(
+    data: FreeMotionData, ident: Identification, input_filter_hz: Optional[float] = None, from_s: float = 0.0
+) -> Payload:
+    """The payload at the tip from free motion with it attached (20 s is enough), fitted on
+    top of ``ident`` with its input conditioning; physically consistent. Releases the GIL."""
 
 def identify(
     data: FreeMotionData,
@@ -566,17 +637,102 @@ def excitation(
     harmonics: int = 5,
     period: Optional[float] = None,
     rate_hz: float = 200.0,
+    pose: Optional[Sequence[float]] = None,
+    range: Union[float, Sequence[float], None] = None,
+    velocity_fraction: Optional[float] = None,
+    acceleration_fraction: Optional[float] = None,
+    acceleration_limit: Optional[float] = None,
 ) -> Dict[str, Any]:
     """A motion for identification (``admittance excite``): dict of ``t`` ``(N,)``, ``q``,
-    ``qdot``, ``qddot`` ``(N, n)`` inside the arm's limits, and ``condition_number``."""
+    ``qdot``, ``qddot`` ``(N, n)`` inside an envelope (default: +-0.5 rad around the middle
+    of the limits, 30 % of the velocity limits, 30 % of 3 rad/s^2; ``range=float("inf")``,
+    fractions 1: the URDF's whole limits), and ``condition_number``."""
 
-def import_bag(path: StrPath, profile: str, rate: Optional[float] = None) -> Dict[str, Any]:
+def import_bag(
+    path: StrPath,
+    profile: str,
+    rate: Optional[float] = None,
+    accept_damaged: bool = False,
+    accept_low_rate: bool = False,
+) -> Dict[str, Any]:
     """A rosbag2 MCAP recording (``admittance import``) as the free-motion dict ``t``, ``q``,
     ``qdot``, ``qddot``, ``tau`` (and the vendor's ``label`` when recorded), with ``report``."""
 
 def load_identification(path: StrPath, m: Optional[Model] = None) -> Identification:
     """Reads an identification file with the URDF it names (or applied to ``m``)."""
 
+
+class ContactFloor:
+    """Per-joint contact and collision thresholds (N m at rest) for a stated false-alarm rate
+    (``calibrate_contact``, ``load_contact_floor``)."""
+
+    @property
+    def contact_thresholds(self) -> Vector:
+        """Contact level per joint at rest (N m), ``(n,)``."""
+    @property
+    def collision_thresholds(self) -> Vector:
+        """Collision level per joint at rest (N m), ``(n,)``."""
+    @property
+    def speed_gain(self) -> Vector:
+        """Relative growth of the levels per rad/s, ``(n,)``."""
+    @property
+    def acceleration_gain(self) -> Vector:
+        """Relative growth of the levels per rad/s^2, ``(n,)``."""
+    @property
+    def smallest_detected(self) -> Vector:
+        """The smallest steady torque detected at rest with 95 % probability per sample (N m)."""
+    @property
+    def false_alarms_per_hour(self) -> float:
+        """The promised false contact events per hour, all joints together."""
+    def to_json(self) -> str:
+        """The floor's whole content as JSON text."""
+    def describe(self) -> str:
+        """The floor as a table with its guarantee and assumption."""
+    def save(self, path: StrPath) -> None:
+        """Writes the versioned, checksummed file atomically."""
+
+class ContactDetector:
+    """The momentum observer on ``ident`` (conditioned as the identification chose) followed
+    by the contact detector of ``floor``."""
+
+    def __init__(self, ident: Identification, floor: ContactFloor, gain: Optional[float] = None) -> None: ...
+    def update(
+        self,
+        t: float,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        qddot: ArrayLike,
+        tau: ArrayLike,
+        dt: float,
+        *,
+        out: Optional[Vector] = None,
+    ) -> Vector:
+        """One period: the estimate ``(n,)``; sets ``contact``, ``collision``, ``link``."""
+    def detect(self, estimate: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> Tuple[bool, bool, int]:
+        """The detector alone on an estimate made elsewhere: ``(contact, collision, link)``."""
+    def reset(self) -> None:
+        """Back to the state just after construction."""
+    @property
+    def contact(self) -> bool:
+        """Some joint's estimate is above its contact level (with hysteresis)."""
+    @property
+    def collision(self) -> bool:
+        """Some joint's estimate is above its collision level (with hysteresis)."""
+    @property
+    def link(self) -> int:
+        """The last joint whose estimate is significant, -1 when none."""
+
+def calibrate_contact(
+    data: Union[StrPath, Dict[str, ArrayLike]],
+    ident: Identification,
+    false_alarms_per_hour: float = 1.0,
+    gain: float = 50.0,
+    constant: bool = False,
+) -> ContactFloor:
+    """The contact floor from free motion the identification did not fit."""
+
+def load_contact_floor(path: StrPath) -> ContactFloor:
+    """Reads a contact-floor file (``ContactFloor.save``, ``admittance calibrate-contact``)."""
 
 class RunFailed(RuntimeError):
     """A scenario run that wrote its folder but failed (a variant diverged or a metric is not

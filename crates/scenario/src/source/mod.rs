@@ -94,7 +94,7 @@ impl ScenarioSource {
     /// Reads and parses a scenario file (syntax only).
     pub fn load(path: &std::path::Path) -> Result<Self, ScenarioError> {
         let file = path.display().to_string();
-        let bytes = std::fs::read(path)
+        let bytes = admittance_files::read_regular(path, admittance_files::TEXT_LIMIT)
             .map_err(|e| ScenarioError::file(&file, format!("cannot read the file: {e}")))?;
         let text = String::from_utf8(bytes).map_err(|e| {
             let line = line_at(

@@ -338,7 +338,11 @@ impl Scenario {
     /// resolved against the scenario file's folder.
     pub fn loop_config_for(&self, scenario_file: &Path) -> LoopConfig<TrainingSpec> {
         let mut config = self.loop_config();
-        if let Some(p) = &mut config.observer.identification {
+        let observer = &mut config.observer;
+        for p in [&mut observer.identification, &mut observer.network]
+            .into_iter()
+            .flatten()
+        {
             if p.is_relative() {
                 *p = scenario_file.parent().unwrap_or(Path::new(".")).join(&*p);
             }

@@ -48,14 +48,17 @@ pub(super) fn read_cache(
     arm: &ArmIdentity,
     settings: &DataSettings,
 ) -> Option<TrainedNetwork> {
-    let meta: Value = serde_json::from_slice(&std::fs::read(meta_path).ok()?).ok()?;
+    let meta: Value = serde_json::from_slice(
+        &admittance_files::read_regular(meta_path, admittance_files::TEXT_LIMIT).ok()?,
+    )
+    .ok()?;
     if meta.get("format")?.as_str()? != "admittance-observer-cache"
         || meta.get("format_version")?.as_u64()? != CACHE_FORMAT_VERSION as u64
         || meta.get("key")?.as_str()? != key_text
     {
         return None;
     }
-    let bytes = std::fs::read(model_path).ok()?;
+    let bytes = admittance_files::read_regular(model_path, admittance_files::DATA_LIMIT).ok()?;
     let model_hash = fnv1a64(&bytes);
     if meta.get("model_hash")?.as_str()? != format!("{model_hash:016x}") {
         return None; // another model file copied over this one

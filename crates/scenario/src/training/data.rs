@@ -47,7 +47,12 @@ pub(super) fn data_source(
 ) -> Result<DataSource, ScenarioError> {
     let path = resolve(scenario_file, given);
     let simulated = path.extension().is_some_and(|e| e == "toml");
-    let bytes = std::fs::read(&path).map_err(|e| {
+    let limit = if simulated {
+        admittance_files::TEXT_LIMIT
+    } else {
+        admittance_files::DATA_LIMIT
+    };
+    let bytes = admittance_files::read_regular(&path, limit).map_err(|e| {
         ctx.err(
             key,
             format!("cannot read {}: {e}", path.display()),
@@ -64,17 +69,18 @@ pub(super) fn data_source(
         rows_hint = (rows.is_finite() && rows >= 0.0)
             .then_some(rows.round().min(usize::MAX as f64) as usize);
         let urdf = data_scenario.urdf_path(&path);
-        let urdf_bytes = std::fs::read(&urdf).map_err(|e| {
-            ctx.err(
-                key,
-                format!(
-                    "{}: cannot read its URDF {}: {e}",
-                    path.display(),
-                    urdf.display()
-                ),
-                None,
-            )
-        })?;
+        let urdf_bytes = admittance_files::read_regular(&urdf, admittance_files::TEXT_LIMIT)
+            .map_err(|e| {
+                ctx.err(
+                    key,
+                    format!(
+                        "{}: cannot read its URDF {}: {e}",
+                        path.display(),
+                        urdf.display()
+                    ),
+                    None,
+                )
+            })?;
         let mut ident = identity.to_le_bytes().to_vec();
         ident.extend_from_slice(&fnv1a64(&urdf_bytes).to_le_bytes());
         ident.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
@@ -117,6 +123,7 @@ fn simulated_data(
     let nested = RunOptions {
         seed: None,
         limits: options.limits,
+        cache_only: options.cache_only,
         progress: outer.map(|p| -> ProgressFn {
             Arc::new(move |e: Progress<'_>| {
                 p(Progress {

@@ -117,6 +117,9 @@ pub(crate) fn identified_nominal(
             return Ok(hit);
         }
     }
+    if options.cache_only {
+        return Err(super::not_cached(ctx, "observer.training.identify", "the identification"));
+    }
     let key_err = |message: String| ctx.err("observer.training.identify", message, None);
     let train = load_data(ctx, &train_src, &arm_joints, options, simulate)?;
     let validation = load_data(ctx, &val_src, &arm_joints, options, simulate)?;
@@ -157,7 +160,7 @@ pub(crate) fn identified_nominal(
     identification
         .save(&path, arm, data)
         .map_err(|e| key_err(e.to_string()))?;
-    let bytes = std::fs::read(&path)
+    let bytes = admittance_files::read_regular(&path, admittance_files::TEXT_LIMIT)
         .map_err(|e| key_err(format!("cannot read back {}: {e}", path.display())))?;
     Ok(IdentifiedNominal {
         path,
@@ -170,7 +173,7 @@ pub(crate) fn identified_nominal(
 /// The identification at `path` when it was made for this key and this arm; `None`
 /// (fit again) for anything else.
 fn cached(path: &std::path::Path, arm: &Model, key_text: &str) -> Option<IdentifiedNominal> {
-    let bytes = std::fs::read(path).ok()?;
+    let bytes = admittance_files::read_regular(path, admittance_files::TEXT_LIMIT).ok()?;
     let identification = Identification::load(path, arm).ok()?;
     let envelope: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
     let recorded = envelope.pointer("/payload/data/cache_key")?.as_str()?;

@@ -160,8 +160,11 @@ pub(crate) fn observer_network(
             k: spec.width_neighbours,
             scale: spec.width_scale,
         },
-        // The hybrid's residual keeps the nominal model alone where it does not pay.
+        // The hybrid's residual keeps the nominal model alone where it does not pay; a
+        // validation source that is the training data is no evidence of other motion
+        // (issue 30): every output is zero, the hybrid is the momentum observer.
         zero_unhelpful_outputs: hybrid,
+        zero_all_outputs: hybrid && train_src.identity == val_src.identity,
         ..BroadConfig::default()
     };
     // The key: data identities, the target, every fit setting.
@@ -236,6 +239,9 @@ pub(crate) fn observer_network(
             return Ok(hit);
         }
     }
+    if options.cache_only {
+        return Err(not_cached(ctx, "observer.training", "the observer's network"));
+    }
 
     let label = variant.unwrap_or("base");
     let train = load_data(ctx, &train_src, arm_joints, options, simulate)?;
@@ -274,4 +280,19 @@ pub(crate) fn observer_network(
     trained.validation_series =
         validation_series(&trained.model, &validation.t, &xv, &yv, arm_joints);
     Ok(trained)
+}
+
+/// The error of a cache-only assembly (`admittance deploy`) that would have to train.
+pub(crate) fn not_cached(ctx: &Ctx<'_>, key: &str, what: &str) -> ScenarioError {
+    let variant = ctx
+        .variant
+        .map(|v| format!(" --variant {v}"))
+        .unwrap_or_default();
+    ctx.err(
+        key,
+        format!("{what} is not in the training cache, and deploy never trains"),
+        Some(&format!(
+            "train it first: `admittance run SCENARIO{variant}` trains and caches it (or name a trained file in observer.network / observer.identification)"
+        )),
+    )
 }

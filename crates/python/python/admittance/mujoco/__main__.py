@@ -26,6 +26,12 @@ def main(argv=None):
         return 130
 
 
+def _log_line(text):
+    from admittance import _progress
+
+    _progress.log_line(text)
+
+
 def _main(argv):
     from ._cosim import VARIANTS, CosimConfig, run_cosimulation
 
@@ -55,7 +61,12 @@ def _main(argv):
                    help="the hybrid on the identification (default) or on the 0.8-inertia URDF (before issue 22)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--force", action="store_true", help="replace an --out folder this tool did not write")
+    p.add_argument("--quiet", action="store_true", help="no progress on the terminal")
     a = p.parse_args(argv)
+    if a.quiet:
+        from admittance import _progress
+
+        _progress.set_quiet(True)
     # Without the identification (--hybrid-nominal nominal) there is no momentum_identified.
     default = VARIANTS if a.hybrid_nominal == "identified" else [v for v in VARIANTS if v != "momentum_identified"]
     if a.hybrid_nominal == "nominal" and a.variant and any("momentum_identified" in v for v in a.variant):
@@ -85,7 +96,7 @@ def _main(argv):
         training_motion=a.training_motion, hybrid_nominal=a.hybrid_nominal,
     )
     try:
-        summary = run_cosimulation(cfg, log=lambda s: print(s, file=sys.stderr))
+        summary = run_cosimulation(cfg, log=_log_line)
     except (OSError, ValueError) as e:
         print(f"admittance.mujoco: {e}", file=sys.stderr)
         return 3

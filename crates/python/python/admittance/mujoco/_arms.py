@@ -28,8 +28,9 @@ Per arm:
    external-torque NRMSE under pushes (the co-simulation's definition) and the rms false
    torque in free motion (all joints, t >= 2 s).
 
-``python -m admittance.mujoco.arms --out runs/mujoco_arms`` writes ``results.json`` and
-``table.md`` there.
+``python -m admittance.mujoco.arms --out runs/mujoco_arms`` runs the arms as sweep jobs
+(``admittance.sweep``: every core, or a Ray cluster with ``--ray``), one folder per arm,
+and writes ``results.json``, ``table.md`` and ``summary.csv`` there.
 """
 
 from __future__ import annotations
@@ -37,13 +38,16 @@ from __future__ import annotations
 import importlib.metadata
 import json
 import math
+import os
 import pathlib
+import tempfile
 import time
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
 import admittance as adm
+from admittance import _progress
 
 from ._cosim import Sensors
 from ._plant import MujocoArm
@@ -135,9 +139,15 @@ def example_robot_data_version():
         return None
 
 
+#: ``adm.excitation``'s envelope for a simulated arm: the URDF's whole position, velocity
+#: and acceleration limits (issue 22's tables; the default envelope is for real arms).
+WHOLE_RANGE = {"range": float("inf"), "velocity_fraction": 1.0, "acceleration_fraction": 1.0}
+
+
 def excitation_motion(m, duration, seed, dt):
     """``adm.excitation`` sampled at the control rate: arrays ``q``, ``qdot``, ``qddot``."""
-    e = adm.excitation(m, duration, seed=seed, rate_hz=1.0 / dt)
+    # A simulation: the URDF's whole limits, not the conservative envelope for a real arm.
+    e = adm.excitation(m, duration, seed=seed, rate_hz=1.0 / dt, **WHOLE_RANGE)
     return {k: np.asarray(e[k]) for k in ("t", "q", "qdot", "qddot")}, float(e["condition_number"])
 
 
@@ -262,14 +272,9 @@ def choose_estimate_cutoff(m, ident, nets, valid, cfg):
 
 
 def lowpass(x, cfg):
-    """The estimate's first-order low-pass (``estimate_cutoff_hz``) along the rows of ``x``."""
-    alpha = cfg.dt / (cfg.dt + 1.0 / (2 * math.pi * cfg.estimate_cutoff_hz))
-    out = np.zeros_like(x)
-    y = np.zeros(x.shape[1])
-    for k in range(len(x)):
-        y += alpha * (x[k] - y)
-        out[k] = y
-    return out
+    """The loop's estimate low-pass (``adm.EstimateLowPass``, ``observer.cutoff_hz`` at
+    ``estimate_cutoff_hz``) along the rows of ``x``, from rest."""
+    return adm.EstimateLowPass(x.shape[1], cfg.estimate_cutoff_hz, 1.0 / cfg.dt).filter(x)
 
 
 def push_nrmse(hat, true, t, cfg):
@@ -292,7 +297,13 @@ def false_torque(hat, t, cfg):
 
 
 def run_arm(name, cfg, log=print, robots=None):
-    """One arm: record, identify, train, evaluate; the numbers as a dict."""
+    """One arm: record, identify, train, evaluate; the numbers as a dict. On a terminal, a
+    spinner names the stage running."""
+    with _progress.spinner(name) as bar:
+        return _run_arm(name, cfg, log, robots, lambda what: bar.set_label(f"{name}: {what}"))
+
+
+def _run_arm(name, cfg, log, robots, stage):
     robots = robots or robots_dir()
     rel, base, tip = ARMS[name]
     path = robots / rel
@@ -302,12 +313,14 @@ def run_arm(name, cfg, log=print, robots=None):
     tip = tip or m.tip_link
     arm = MujocoArm(path.read_text(), m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale)
 
+    stage("excitation")
     t0 = time.perf_counter()
     train_motion, cond_train = excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
     eval_motion, cond_eval = excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
     valid_motion, cond_valid = excitation_motion(m, cfg.validation_duration, cfg.validation_seed, cfg.dt)
     timings["excitation"] = time.perf_counter() - t0
 
+    stage("recording 4 runs in MuJoCo")
     t0 = time.perf_counter()
     gains = recording_gains(m, train_motion["q"].mean(axis=0), arm.terms)
     rng = np.random.default_rng(cfg.seed)
@@ -319,9 +332,11 @@ def run_arm(name, cfg, log=print, robots=None):
     timings["mujoco"] = time.perf_counter() - t0
     assert np.all(free_true == 0.0)
 
+    stage("identification")
     t0 = time.perf_counter()
     ident = adm.identify(train, m, validation=valid, input_filter_hz=cfg.input_filter_hz)
     timings["identify"] = time.perf_counter() - t0
+    stage(f"training 3 networks of {cfg.nodes} nodes")
     t0 = time.perf_counter()
     common = dict(input_filter_hz=cfg.input_filter_hz, validation=valid, seed=cfg.seed)
     nets = {
@@ -331,6 +346,7 @@ def run_arm(name, cfg, log=print, robots=None):
     }
     timings["train"] = time.perf_counter() - t0
 
+    stage("evaluating 5 observers")
     t0 = time.perf_counter()
     cutoff_scan = None
     if cfg.estimate_cutoff_hz <= 0:
@@ -389,11 +405,7 @@ def run_arm(name, cfg, log=print, robots=None):
         "bars": bars(observers),
         "seconds": timings,
     }
-    log(
-        f"{name}: " + ", ".join(
-            f"{k} {v['push_nrmse']:.3f} / {v['free_false_torque_rms']:.3f} N m" for k, v in observers.items()
-        ) + f" ({timings['total']:.0f} s)"
-    )
+    log(arm_line(result))
     return result
 
 
@@ -439,16 +451,66 @@ def table_markdown(results):
     return "\n".join(lines) + "\n"
 
 
-def run_all(cfg, log=print):
-    robots = robots_dir()
+#: The config keys that do not change an arm's numbers (an arm's finished folder is reused
+#: whatever they are).
+NOT_IN_JOB = ("out", "arms")
+
+
+def arm_job(folder, name, config):
+    """One arm as a sweep job (``admittance.sweep``): ``run_arm`` with the settings
+    ``config`` (an ``ArmsConfig`` as a dict, without ``out`` and ``arms``); its result is
+    the job's ``result.json``."""
+    cfg = ArmsConfig(**config, out=str(folder), arms=[name])
+    return run_arm(name, cfg, log=lambda s: None)
+
+
+def jobs_of(cfg):
+    """The table's sweep jobs, one per arm of ``cfg.arms``."""
+    from admittance import sweep
+
+    settings = {k: v for k, v in asdict(cfg).items() if k not in NOT_IN_JOB}
+    return [
+        sweep.call_job("admittance.mujoco._arms:arm_job", {"name": name, "config": settings}, name)
+        for name in cfg.arms
+    ]
+
+
+def run_all(cfg, log=print, jobs=None, ray=None, retries=0, force=False):
+    """Every arm of ``cfg.arms`` as a sweep job (``jobs`` at a time, default every core; or
+    on the Ray cluster at ``ray``): one folder per arm in ``cfg.out`` (``<arm>/result.json``,
+    kept across runs: an arm already finished with the same settings is not run again), then
+    ``results.json``, ``table.md`` and ``summary.csv``. Returns the results of the finished
+    arms and the names of the failed ones."""
+    from admittance import sweep
+
+    robots_dir()  # a clear error before any job starts
     out = pathlib.Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
+    done = sweep.run_sweep(jobs_of(cfg), out, jobs, ray, retries, force, log=log)
     results = []
     for name in cfg.arms:
-        results.append(run_arm(name, cfg, log, robots))
-        _write(out, cfg, results, time.perf_counter() - started)  # kept after every arm
-    return results
+        if name in done.failed:
+            continue
+        r = json.loads((out / name / sweep.RESULT_FILE).read_text())
+        results.append(r)
+        log(arm_line(r))
+    _write(out, cfg, results, time.perf_counter() - started)
+    return results, done.failed
+
+
+def arm_line(r):
+    """One arm's numbers in one line: each observer's NRMSE under pushes / false torque."""
+    observers = r["observers"]
+    return f"{r['arm']}: " + ", ".join(
+        f"{k} {v['push_nrmse']:.3f} / {v['free_false_torque_rms']:.3f} N m" for k, v in observers.items()
+    ) + f" ({r['seconds']['total']:.0f} s)"
+
+
+def _write_atomic(path, text):
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
 
 
 def _write(out, cfg, results, seconds):
@@ -461,8 +523,9 @@ def _write(out, cfg, results, seconds):
         "seconds": seconds,
         "arms": results,
     }
-    (out / "results.json").write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n")
-    (out / "table.md").write_text(
+    _write_atomic(out / "results.json", json.dumps(doc, indent=2, allow_nan=False) + "\n")
+    _write_atomic(
+        out / "table.md",
         "Per arm and observer: external-torque NRMSE under pushes / rms false torque in free motion (N m), "
-        "both on motion not trained on.\n\n" + table_markdown(results)
+        "both on motion not trained on.\n\n" + table_markdown(results),
     )

@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 import admittance as adm
+from admittance import _progress
 
 from ._plant import Encoder, MujocoArm
 
@@ -133,7 +134,9 @@ def _excitation(m, rng, duration, dt):
     steps = period / dt
     if abs(steps - round(steps)) > 1e-6:
         period = duration  # periods of a fractional number of steps: all of it
-    e = adm.excitation(m, period, seed=seed, period=period, rate_hz=1.0 / dt)
+    # A simulation: the URDF's whole limits, not the conservative envelope for a real arm.
+    e = adm.excitation(m, period, seed=seed, period=period, rate_hz=1.0 / dt,
+                       range=float("inf"), velocity_fraction=1.0, acceleration_fraction=1.0)
     q, v, a = (np.asarray(e[k]) for k in ("q", "qdot", "qddot"))
     per = len(q) - 1
 
@@ -165,7 +168,7 @@ def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration):
     rows = {k: np.zeros((steps, n)) for k in ("q", "qdot", "qddot", "tau")}
     t_col = np.arange(steps) * cfg.dt
     zeros = np.zeros(n)
-    for k in range(steps):
+    for k in _progress.steps(range(steps), f"free motion: {duration:.0f} s in MuJoCo"):
         t = k * cfg.dt
         q, qdot, qddot, tau_f = sensors.sample(arm.q(), tau)
         rows["q"][k], rows["qdot"][k], rows["qddot"][k], rows["tau"][k] = q, qdot, qddot, tau_f
@@ -316,7 +319,7 @@ def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification
     tau_ext = np.zeros(n)  # MuJoCo's external torque of the last step (the oracle's input)
     out = (np.zeros(n), np.zeros(n))
     started = time.perf_counter()
-    for k in range(steps):
+    for k in _progress.steps(range(steps), f"{variant}: {cfg.duration:.0f} s with the admittance loop"):
         t = k * dt
         q_d, qdot_d, qddot_d = desired(t)
         # The command held over the period that just ended is the loop's own (tau=None).
@@ -474,7 +477,8 @@ def run_cosimulation(cfg: CosimConfig, log=print):
         validation = record_free_motion(probe, m, q0, pd, cfg, np.random.default_rng(cfg.seed + 1000), cfg.validation_duration)
         data, validation = _delayed_torque(data), _delayed_torque(validation)
         log(f"free-motion data: {cfg.training_duration:.0f} s + {cfg.validation_duration:.0f} s of validation in {time.perf_counter() - started:.1f} s")
-        nets = train_networks(m, m_nominal, data, validation, cfg)
+        with _progress.spinner(f"training the networks ({cfg.nodes} nodes each) and the identification"):
+            nets = train_networks(m, m_nominal, data, validation, cfg)
         for name, net in nets.items():
             log(f"{name}: validation NRMSE {np.round(net.validation_nrmse, 3).tolist()}")
     recorders = []

@@ -24,7 +24,18 @@ def main(argv=None):
     p.add_argument("--estimate-cutoff-hz", type=float, default=0.0, help="the estimate's low-pass, Hz (0: chosen per arm on the validation recording among 5, 10, 20, 40)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
+    p.add_argument("--jobs", type=int, default=None, help="arms at once, each in a process of its own (default: every core)")
+    p.add_argument("--ray", metavar="ADDRESS", help="run the arms on the Ray cluster at ADDRESS ('auto', 'local', or ray://HOST:PORT)")
+    p.add_argument("--retries", type=int, default=0, help="re-run a failed arm at once, alone, up to this many times (0)")
+    p.add_argument("--force", action="store_true", help="replace arm folders in --out made with other settings")
+    p.add_argument("--quiet", action="store_true", help="no progress on the terminal")
     a = p.parse_args(argv)
+    if a.jobs is not None and a.jobs < 1:
+        p.error("--jobs must be at least 1")
+    if a.quiet:
+        from admittance import _progress
+
+        _progress.set_quiet(True)
     try:
         import mujoco  # noqa: F401
     except ImportError:
@@ -47,12 +58,29 @@ def main(argv=None):
         nodes=a.nodes, push_force=a.push_force, friction_scale=a.friction_scale,
         input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed,
     )
+    from admittance import _progress
+    from admittance.sweep import SweepError
+
     try:
-        run_all(cfg, log=lambda s: print(s, file=sys.stderr, flush=True))
+        _, failed = run_all(cfg, log=_progress.log_line, jobs=a.jobs, ray=a.ray, retries=a.retries, force=a.force)
     except FileNotFoundError as e:
         print(f"admittance.mujoco.arms: {e}", file=sys.stderr)
         return 2
-    print(f"wrote {a.out}/results.json and {a.out}/table.md", file=sys.stderr)
+    except RuntimeError as e:  # Ray missing or unreachable
+        print(f"admittance.mujoco.arms: {e}", file=sys.stderr)
+        return 2
+    except (SweepError, OSError) as e:
+        print(f"admittance.mujoco.arms: {e}", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print(f"admittance.mujoco.arms: interrupted; the finished arms' folders in {a.out} are kept: run the same "
+              "command again to go on", file=sys.stderr)
+        return 130
+    print(f"wrote {a.out}/results.json, {a.out}/table.md and {a.out}/summary.csv (one folder per arm)", file=sys.stderr)
+    if failed:
+        print(f"admittance.mujoco.arms: {len(failed)} arm(s) failed ({', '.join(failed)}): run the same command "
+              "again to run only those", file=sys.stderr)
+        return 1
     return 0
 
 

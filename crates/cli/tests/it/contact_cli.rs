@@ -1,0 +1,151 @@
+//! `admittance calibrate-contact` and `admittance evaluate --contact-floor` (issue 31): a
+//! floor from free motion the identification did not fit, its false alarms on other free
+//! motion, and the refusal to overwrite a file that is not a floor.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn admittance(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_admittance"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Free motion of the Baxter model (multi-sine, 200 Hz) with viscous friction and white
+/// torque noise of 0.3 N m (what no identification fits), as a CSV.
+fn free_motion_csv(dir: &Path, seed: f64, seconds: f64) -> PathBuf {
+    use admittance_dynamics::{rnea, Data, Model};
+    let model = Model::from_urdf_file(
+        &root().join("models/baxter_left_arm.urdf"),
+        Some("base"),
+        Some("left_hand"),
+    )
+    .unwrap();
+    let names: Vec<String> = model.joint_names().map(String::from).collect();
+    let mut csv = String::from("t");
+    for s in ["q", "qdot", "qddot", "tau"] {
+        for j in &names {
+            csv += &format!(",{s}.{j}");
+        }
+    }
+    csv.push('\n');
+    let mut data = Data::new(&model);
+    let mut state = (seed * 1e6) as u64 | 1;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..(seconds * 200.0) as usize {
+        let t = k as f64 / 200.0;
+        let (mut q, mut qd, mut qdd) = (vec![0.0; 7], vec![0.0; 7], vec![0.0; 7]);
+        for i in 0..7 {
+            for h in 1..=3 {
+                let w = 2.0
+                    * std::f64::consts::PI
+                    * (0.11 * h as f64 + 0.03 * i as f64)
+                    * (1.0 + 0.2 * seed);
+                let (a, ph) = (0.5 / h as f64, seed * (1 + i + h) as f64);
+                q[i] += a * (w * t + ph).sin();
+                qd[i] += a * w * (w * t + ph).cos();
+                qdd[i] -= a * w * w * (w * t + ph).sin();
+            }
+        }
+        let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
+        csv += &format!("{t}");
+        for v in q.iter().chain(&qd).chain(&qdd) {
+            csv += &format!(",{v}");
+        }
+        for i in 0..7 {
+            // Irwin-Hall: the sum of 12 uniforms less 6 is close to a unit normal.
+            let noise = (0..12).map(|_| uniform()).sum::<f64>() - 6.0;
+            csv += &format!(",{}", tau[i] + 1.5 * qd[i] + 0.3 * noise);
+        }
+        csv.push('\n');
+    }
+    let path = dir.join(format!("free_{seed}.csv"));
+    std::fs::write(&path, csv).unwrap();
+    path
+}
+
+#[test]
+fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let train = free_motion_csv(dir.path(), 0.3, 30.0);
+    let held_out = free_motion_csv(dir.path(), 1.9, 120.0);
+    let other = free_motion_csv(dir.path(), 2.7, 120.0);
+    let ident = dir.path().join("baxter.ident.json");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let o = admittance(&[
+        "identify",
+        "--data",
+        &s(&train),
+        "--urdf",
+        &s(&urdf),
+        "--out",
+        &s(&ident),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let floor = dir.path().join("floor.json");
+    let o = admittance(&[
+        "calibrate-contact",
+        &s(&held_out),
+        "--identification",
+        &s(&ident),
+        "--out",
+        &s(&floor),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("guarantee"), "{}", text(&o));
+    let written = std::fs::read_to_string(&floor).unwrap();
+    assert!(written.contains("\"format\": \"admittance-contact-floor\""));
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        &s(&other),
+        "--urdf",
+        &s(&urdf),
+        "--identification",
+        &s(&ident),
+        "--contact-floor",
+        &s(&floor),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = text(&o);
+    let events: usize = table
+        .lines()
+        .filter(|l| l.starts_with("contact "))
+        .find_map(|l| l.split_whitespace().nth(1)?.parse().ok())
+        .unwrap_or_else(|| panic!("no contact row in\n{table}"));
+    // Promised 1 per hour: in 2 min of the same kind of motion, at most one.
+    assert!(events <= 1, "{table}");
+    // A file that is not a floor is not overwritten.
+    let mine = dir.path().join("mine.json");
+    std::fs::write(&mine, "{}").unwrap();
+    let o = admittance(&[
+        "calibrate-contact",
+        &s(&held_out),
+        "--identification",
+        &s(&ident),
+        "--out",
+        &s(&mine),
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("not overwritten"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
+}

@@ -1,0 +1,367 @@
+//! Settings travel with the files (issue 30 item 6) and `evaluate` refuses what was made for
+//! another arm or identification (issue 34 item 6): the conditioning comes from the
+//! identification and network files, a contradicting flag is refused, a residual network
+//! given as `--network` is recognised, and a residual without a recording of other motion
+//! is all zeros (issue 30 item 5).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn admittance(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_admittance"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = admittance(args);
+    assert!(o.status.success(), "{args:?}\n{}", text(&o));
+    text(&o)
+}
+
+/// The rms column of the row of `evaluate`'s table named `name`.
+fn rms(table: &str, name: &str) -> f64 {
+    let line = table
+        .lines()
+        .find(|l| l.starts_with(name))
+        .unwrap_or_else(|| panic!("no row {name} in\n{table}"));
+    line[name.len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+/// Free motion of the Baxter model with friction it does not know and sensor noise, as a
+/// CSV whose columns name the joints `names` (the Baxter's, or another arm's of 7 joints).
+fn free_motion_csv(dir: &Path, seed: f64, seconds: f64, names: &[String]) -> PathBuf {
+    use admittance_dynamics::{rnea, Data};
+    let model = baxter();
+    let mut csv = String::from("t");
+    for s in ["q", "qdot", "qddot", "tau"] {
+        for j in names {
+            csv += &format!(",{s}.{j}");
+        }
+    }
+    csv.push('\n');
+    let mut data = Data::new(&model);
+    for k in 0..(seconds * 200.0) as usize {
+        let t = k as f64 / 200.0;
+        let (mut q, mut qd, mut qdd) = (vec![0.0; 7], vec![0.0; 7], vec![0.0; 7]);
+        for i in 0..7 {
+            for h in 1..=3 {
+                let w = 2.0
+                    * std::f64::consts::PI
+                    * (0.11 * h as f64 + 0.03 * i as f64)
+                    * (1.0 + 0.2 * seed);
+                let (a, ph) = (0.5 / h as f64, seed * (1 + i + h) as f64);
+                q[i] += a * (w * t + ph).sin();
+                qd[i] += a * w * (w * t + ph).cos();
+                qdd[i] -= a * w * w * (w * t + ph).sin();
+            }
+        }
+        let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
+        csv += &format!("{t}");
+        for v in q.iter().chain(&qd).chain(&qdd) {
+            csv += &format!(",{v}");
+        }
+        for i in 0..7 {
+            // Deterministic "noise": what no model of q, q', q'' explains.
+            let noise = 0.3 * ((k * (i + 3)) as f64 * 1.618).sin();
+            csv += &format!(
+                ",{}",
+                tau[i] + 1.5 * qd[i] + 0.8 * (qd[i] / 0.01).tanh() + noise
+            );
+        }
+        csv.push('\n');
+    }
+    let path = dir.join(format!("free_{seed}_{}.csv", names[0]));
+    std::fs::write(&path, csv).unwrap();
+    path
+}
+
+fn baxter() -> admittance_dynamics::Model {
+    admittance_dynamics::Model::from_urdf_file(
+        &root().join("models/baxter_left_arm.urdf"),
+        Some("base"),
+        Some("left_hand"),
+    )
+    .unwrap()
+}
+
+fn joints(urdf: &str) -> Vec<String> {
+    admittance_dynamics::Model::from_urdf_file(&root().join(urdf), None, None)
+        .unwrap()
+        .joint_names()
+        .map(String::from)
+        .collect()
+}
+
+struct Files {
+    _dir: tempfile::TempDir,
+    urdf: String,
+    train: String,
+    other: String,
+    ident10: String,
+}
+
+/// Two recordings and a 10 Hz identification of the first.
+fn files() -> Files {
+    let dir = tempfile::tempdir().unwrap();
+    let names: Vec<String> = baxter().joint_names().map(String::from).collect();
+    let train = free_motion_csv(dir.path(), 0.3, 30.0, &names);
+    let other = free_motion_csv(dir.path(), 1.9, 12.0, &names);
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let ident10 = dir.path().join("ten.ident.json");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    ok(&[
+        "identify",
+        "--data",
+        &s(&train),
+        "--urdf",
+        &s(&urdf),
+        "--input-filter-hz",
+        "10",
+        "--out",
+        &s(&ident10),
+    ]);
+    Files {
+        urdf: s(&urdf),
+        train: s(&train),
+        other: s(&other),
+        ident10: s(&ident10),
+        _dir: dir,
+    }
+}
+
+impl Files {
+    fn path(&self, name: &str) -> String {
+        self._dir.path().join(name).to_str().unwrap().to_string()
+    }
+}
+
+#[test]
+fn evaluate_conditions_as_the_identification_was_fitted() {
+    let f = files();
+    let eval = |extra: &[&str]| {
+        let mut args = vec![
+            "evaluate",
+            "--data",
+            &f.other,
+            "--urdf",
+            &f.urdf,
+            "--identification",
+            &f.ident10,
+        ];
+        args.extend_from_slice(extra);
+        admittance(&args)
+    };
+    let default = eval(&[]);
+    assert!(default.status.success(), "{}", text(&default));
+    let table = text(&default);
+    assert!(table.contains("input filter: 10 Hz"), "{table}");
+    let explicit = text(&eval(&["--input-filter-hz", "10"]));
+    let name = "identified + joint terms";
+    assert_eq!(
+        rms(&table, name),
+        rms(&explicit, name),
+        "{table}\n{explicit}"
+    );
+    // The raw signals would score it differently: the default is not the raw columns.
+    let wrong = eval(&["--input-filter-hz", "0"]);
+    assert_eq!(wrong.status.code(), Some(2), "{}", text(&wrong));
+    let message = text(&wrong);
+    assert!(
+        message.contains("--input-filter-hz 0") && message.contains(&f.ident10),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_residual_is_recognised_and_checked_against_its_identification() {
+    let f = files();
+    let residual = f.path("residual.bin");
+    // With a recording of other motion: a residual is fitted (outputs that gain on it kept).
+    ok(&[
+        "train",
+        "--data",
+        &f.train,
+        "--urdf",
+        &f.urdf,
+        "--nominal",
+        &f.ident10,
+        "--validation",
+        &f.other,
+        "--nodes",
+        "40",
+        "--out",
+        &residual,
+        "--quiet",
+    ]);
+    // Given as --network, it is scored as the identification + residual.
+    let table = ok(&[
+        "evaluate",
+        "--data",
+        &f.other,
+        "--urdf",
+        &f.urdf,
+        "--identification",
+        &f.ident10,
+        "--network",
+        &residual,
+    ]);
+    assert!(table.contains("identified + residual network"), "{table}");
+    assert!(table.contains("hybrid (identified + residual)"), "{table}");
+    assert!(!table.contains(&format!("network {residual}")), "{table}");
+    // Without its identification: refused, naming the flag.
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        &f.other,
+        "--urdf",
+        &f.urdf,
+        "--network",
+        &residual,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--identification"), "{}", text(&o));
+    // With another identification (another checksum): refused, naming both files.
+    let raw = f.path("raw.ident.json");
+    ok(&[
+        "identify", "--data", &f.train, "--urdf", &f.urdf, "--out", &raw,
+    ]);
+    for flag in ["--network", "--residual"] {
+        let o = admittance(&[
+            "evaluate",
+            "--data",
+            &f.other,
+            "--urdf",
+            &f.urdf,
+            "--identification",
+            &raw,
+            flag,
+            &residual,
+        ]);
+        assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+        let m = text(&o);
+        assert!(
+            m.contains("checksum") && m.contains(&raw) && m.contains(&residual),
+            "{m}"
+        );
+    }
+    // train --nominal takes the identification's conditioning; a flag against it is refused.
+    let o = admittance(&[
+        "train",
+        "--data",
+        &f.train,
+        "--urdf",
+        &f.urdf,
+        "--nominal",
+        &f.ident10,
+        "--input-filter-hz",
+        "4",
+        "--nodes",
+        "40",
+        "--out",
+        &f.path("refused.bin"),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!Path::new(&f.path("refused.bin")).exists());
+}
+
+#[test]
+fn a_residual_without_other_motion_is_the_identification_alone() {
+    let f = files();
+    let residual = f.path("cv.bin");
+    let out = ok(&[
+        "train",
+        "--data",
+        &f.train,
+        "--urdf",
+        &f.urdf,
+        "--nominal",
+        &f.ident10,
+        "--nodes",
+        "40",
+        "--out",
+        &residual,
+        "--quiet",
+    ]);
+    assert!(out.contains("zeroed (every output)"), "{out}");
+    let table = ok(&[
+        "evaluate",
+        "--data",
+        &f.other,
+        "--urdf",
+        &f.urdf,
+        "--identification",
+        &f.ident10,
+        "--residual",
+        &residual,
+    ]);
+    assert_eq!(
+        rms(&table, "hybrid (identified + residual)"),
+        rms(&table, "momentum (identified)"),
+        "{table}"
+    );
+    assert_eq!(
+        rms(&table, "identified + residual network"),
+        rms(&table, "identified + joint terms"),
+        "{table}"
+    );
+}
+
+#[test]
+fn a_network_of_another_arm_is_refused() {
+    let f = files();
+    let net = f.path("baxter.bin");
+    ok(&[
+        "train", "--data", &f.train, "--urdf", &f.urdf, "--nodes", "40", "--out", &net, "--quiet",
+    ]);
+    // The same motion under the Panda's joint names: sizes agree, the arm does not.
+    let panda = root().join("models/franka_panda.urdf");
+    let names = joints("models/franka_panda.urdf");
+    assert_eq!(names.len(), 7);
+    let data = free_motion_csv(Path::new(&f.path("")), 1.9, 3.0, &names);
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        panda.to_str().unwrap(),
+        "--network",
+        &net,
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    let m = text(&o);
+    assert!(m.contains(&net) && m.contains("joints"), "{m}");
+    // A torque network given as the residual: refused, naming the right flag.
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        &f.other,
+        "--urdf",
+        &f.urdf,
+        "--identification",
+        &f.ident10,
+        "--residual",
+        &net,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--network"), "{}", text(&o));
+}

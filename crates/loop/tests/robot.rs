@@ -1,0 +1,237 @@
+//! `RobotLoop` (issue 32) and its plausibility gates (issue 34): no command before every
+//! joint has an angle, the first pose held without a desired motion, one absurd sample
+//! flagged and forgotten, and the deployment folder's checks.
+
+use std::path::Path;
+
+use admittance_dynamics::{rnea, Data, Model};
+use admittance_loop::{
+    write_deployment, Deployment, Implausible, RobotConfig, RobotInput, RobotLoop,
+};
+
+const URDF: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../models/baxter_left_arm.urdf"
+);
+const POSE: [f64; 7] = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
+
+const LOOP_TOML: &str = r#"format = "admittance-loop"
+version = 1
+[arm]
+urdf = "arm.urdf"
+base = "base"
+tip = "left_hand"
+[controller]
+kind = "pd"
+pd = { kp = 50.0, kd = 5.0, gravity_compensation = true }
+[admittance]
+damping = 3.0
+stiffness = 5.0
+[observer]
+kind = "momentum"
+input_filter_hz = 10.0
+cutoff_hz = 5.0
+momentum = { gain = 50.0 }
+"#;
+
+fn model() -> Model {
+    Model::from_urdf_file(URDF.as_ref(), Some("base"), Some("left_hand")).unwrap()
+}
+
+fn robot_loop(overrides: &[&str]) -> RobotLoop {
+    let config = RobotConfig::from_toml_with(LOOP_TOML, Path::new("loop.toml"), overrides).unwrap();
+    RobotLoop::new(model(), &config, Path::new("."), None, None).unwrap()
+}
+
+/// A slow motion around the pose with the torque its inverse dynamics needs.
+fn motion(model: &Model, data: &mut Data, k: usize) -> ([f64; 7], [f64; 7]) {
+    let t = k as f64 * 1e-3;
+    let (mut q, mut v, mut a) = ([0.0; 7], [0.0; 7], [0.0; 7]);
+    for i in 0..7 {
+        let w = 1.0 + 0.3 * i as f64;
+        q[i] = POSE[i] + 0.1 * (w * t).sin();
+        v[i] = 0.1 * w * (w * t).cos();
+        a[i] = -0.1 * w * w * (w * t).sin();
+    }
+    let mut tau = [0.0; 7];
+    tau.copy_from_slice(rnea(model, data, &q, &v, &a).unwrap().as_slice());
+    (q, tau)
+}
+
+#[test]
+fn nothing_is_commanded_before_every_joint_has_an_angle_then_the_pose_is_held() {
+    let mut l = robot_loop(&[]);
+    let mut q = POSE;
+    q[6] = f64::NAN;
+    for k in 0..5 {
+        let s = l.step(&RobotInput {
+            time: k as f64 * 1e-3,
+            q: &q,
+            qdot: None,
+            tau: None,
+            desired: None,
+        });
+        assert!(s.waiting_for_angles && !s.is_ok());
+        assert!(l.torque().iter().all(|&t| t == 0.0));
+    }
+    // A short slice is the same: joints without a value have no angle.
+    let s = l.step(&RobotInput {
+        time: 0.005,
+        q: &POSE[..3],
+        qdot: None,
+        tau: None,
+        desired: None,
+    });
+    assert!(s.waiting_for_angles);
+    for k in 6..400 {
+        let s = l.step(&RobotInput {
+            time: k as f64 * 1e-3,
+            q: &POSE,
+            qdot: None,
+            tau: None,
+            desired: None,
+        });
+        assert!(!s.waiting_for_angles && s.holding_pose, "step {k}");
+    }
+    assert!(l.torque().iter().any(|&t| t != 0.0));
+    // The hold is where the arm was (the first full sample), not a scenario's trajectory.
+    let q_r = l.reference()[0];
+    for i in 0..6 {
+        assert!((q_r[i] - POSE[i]).abs() < 1e-9, "joint {i}: {}", q_r[i]);
+    }
+    // Joint 6 delivered its first angle at step 5 (POSE); held since.
+    assert!((q_r[6] - POSE[6]).abs() < 1e-9);
+}
+
+#[test]
+fn each_gate_flags_its_sample_and_the_estimate_forgets_it() {
+    let model = model();
+    let mut data = Data::new(&model);
+    let steps = 3000;
+    let samples: Vec<_> = (0..steps).map(|k| motion(&model, &mut data, k)).collect();
+    let run = |overrides: &[&str], hit: bool| {
+        let mut l = robot_loop(overrides);
+        let mut out = Vec::new();
+        for (k, (q, tau)) in samples.iter().enumerate() {
+            let (mut q, mut tau) = (*q, *tau);
+            if hit {
+                match k {
+                    1000 => tau[1] = 1e300,
+                    1200 => q[3] = 1e20,
+                    1400 => q[2] += 0.5, // 0.5 rad in 1 ms: no motor moves so
+                    _ => {}
+                }
+            }
+            let s = l.step(&RobotInput {
+                time: k as f64 * 1e-3,
+                q: &q,
+                qdot: None,
+                tau: Some(&tau),
+                desired: None,
+            });
+            out.push((
+                s,
+                l.external_torque_estimate().to_vec(),
+                l.torque().to_vec(),
+            ));
+        }
+        (out, l.implausible_samples())
+    };
+    let (clean, none) = run(&[], false);
+    assert_eq!(none, 0);
+    assert!(clean
+        .iter()
+        .skip(1)
+        .all(|(s, _, _)| s.implausible.is_none()));
+    let (hit, count) = run(&[], true);
+    assert_eq!(count, 3);
+    for (k, gate, joint) in [
+        (1000, Implausible::Torque, 1),
+        (1200, Implausible::Angle, 3),
+        (1400, Implausible::Jump, 2),
+    ] {
+        let g = hit[k]
+            .0
+            .implausible
+            .unwrap_or_else(|| panic!("step {k} not flagged"));
+        assert_eq!((g.gate, g.joint), (gate, joint), "step {k}");
+    }
+    let gap = |k: usize| -> f64 {
+        (0..7)
+            .map(|i| (hit[k].1[i] - clean[k].1[i]).abs())
+            .fold(0.0, f64::max)
+    };
+    let during = (1000..steps).map(gap).fold(0.0, f64::max);
+    let after = (2400..steps).map(gap).fold(0.0, f64::max);
+    eprintln!("momentum: estimate off the clean run by {during:.3e} N m at most, {after:.3e} N m 1 s after the last");
+    assert!(during < 0.5, "{during}");
+    assert!(after < 1e-3, "{after}");
+    assert!(hit
+        .iter()
+        .all(|(_, _, tau)| tau.iter().all(|t| t.is_finite())));
+    // Without the gates the same samples poison the estimate: the test can fail.
+    let (open, _) = run(&["signals.gates.enabled = false"], true);
+    let poisoned = (1000..steps)
+        .map(|k| {
+            (0..7)
+                .map(|i| (open[k].1[i] - clean[k].1[i]).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert!(poisoned > 1e3 || poisoned.is_nan(), "ungated: {poisoned}");
+}
+
+#[test]
+fn a_deployment_folder_is_verified_file_by_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("deploy");
+    let files = vec![
+        ("loop.toml".to_string(), LOOP_TOML.as_bytes().to_vec()),
+        ("arm.urdf".to_string(), std::fs::read(URDF).unwrap()),
+    ];
+    write_deployment(&dir, &files, serde_json::json!({"tool": "test"})).unwrap();
+    let d = Deployment::load(&dir).unwrap();
+    assert_eq!(
+        d.file_names().collect::<Vec<_>>(),
+        ["arm.urdf", "loop.toml"]
+    );
+    let l = RobotLoop::load(&dir, &["signals.filter_cutoff_hz = 10"]).unwrap();
+    assert_eq!(l.dof(), 7);
+    // A setting out of range names its key.
+    let e = RobotLoop::load(&dir, &["signals.filter_cutoff_hz = 600"])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("signals.filter_cutoff_hz"), "{e}");
+    // Not a folder someone else wrote over: refused.
+    let other = tmp.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    assert!(write_deployment(&other, &files, serde_json::Value::Null).is_err());
+    assert_eq!(
+        std::fs::read_to_string(other.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    // A loop file naming a file the manifest does not list.
+    let mut listed = files.clone();
+    listed[0].1 = LOOP_TOML
+        .replace("[observer]", "[observer]\nidentification = \"ident.json\"")
+        .into_bytes();
+    write_deployment(&dir, &listed, serde_json::Value::Null).unwrap();
+    let e = Deployment::load(&dir).err().unwrap().to_string();
+    assert!(
+        e.contains("observer.identification") && e.contains("ident.json"),
+        "{e}"
+    );
+    // An edited file.
+    write_deployment(&dir, &files, serde_json::Value::Null).unwrap();
+    std::fs::write(dir.join("loop.toml"), LOOP_TOML.replace("50.0", "60.0")).unwrap();
+    let e = Deployment::load(&dir).err().unwrap().to_string();
+    assert!(
+        e.contains("loop.toml") && e.contains("does not match the manifest"),
+        "{e}"
+    );
+    // Not a deployment folder.
+    let e = Deployment::load(tmp.path()).err().unwrap().to_string();
+    assert!(e.contains("manifest.json"), "{e}");
+}

@@ -1,0 +1,195 @@
+//! Identification of a recording as every front end runs it (issue 30): the raw columns
+//! through the observers' input conditioning (`InputConditioner`, docs/method.md section 7),
+//! the cut-off chosen on held-out motion when the caller gives none, the delay of the torque
+//! behind the motion and the acceleration gain chosen by [`admittance_dynamics::identify`],
+//! and the choices written into the identification's summary, so that every consumer
+//! conditions its inputs the same way.
+
+use admittance_dynamics::{identify, Identification, IdentificationSettings, Model, Samples};
+
+use crate::free_motion::{observer_training_arrays, FreeMotionData};
+
+/// Cut-offs tried when the caller gives none (Hz; 0: the signals as recorded). None is
+/// slower than 4 Hz: a slower filter hides contact for longer than it saves false torque.
+pub const CUTOFF_CANDIDATES_HZ: [f64; 4] = [4.0, 6.0, 10.0, 0.0];
+
+/// A recording's samples through the input conditioning at one cut-off.
+pub struct ConditionedSamples {
+    /// Conditioned angles, row-major (n per sample).
+    pub q: Vec<f64>,
+    /// Their derivative.
+    pub qdot: Vec<f64>,
+    /// Their second derivative.
+    pub qddot: Vec<f64>,
+    /// Conditioned torques.
+    pub tau: Vec<f64>,
+    /// Joints.
+    pub dof: usize,
+}
+
+impl ConditionedSamples {
+    /// `data` through the conditioning at `input_filter_hz` (0: as recorded).
+    pub fn new(data: &FreeMotionData, input_filter_hz: f64) -> Result<Self, String> {
+        let n = data.dof();
+        let (x, tau) = observer_training_arrays(data, input_filter_hz).map_err(|e| e.to_string())?;
+        let mut out = ConditionedSamples {
+            q: Vec::with_capacity(tau.len()),
+            qdot: Vec::with_capacity(tau.len()),
+            qddot: Vec::with_capacity(tau.len()),
+            tau,
+            dof: n,
+        };
+        for row in x.chunks_exact(3 * n) {
+            out.q.extend_from_slice(&row[..n]);
+            out.qdot.extend_from_slice(&row[n..2 * n]);
+            out.qddot.extend_from_slice(&row[2 * n..]);
+        }
+        Ok(out)
+    }
+
+    /// As identification samples.
+    pub fn samples(&self) -> Samples<'_> {
+        Samples {
+            q: &self.q,
+            qdot: &self.qdot,
+            qddot: &self.qddot,
+            tau: &self.tau,
+            dof: self.dof,
+        }
+    }
+
+    /// Pairs each motion sample with each joint's torque `delay_s[i]` later (linear
+    /// interpolation, held at the ends), as an identification with those delays expects
+    /// (`IdentificationSummary::delay_s`; empty: none); `rate_hz` the samples'.
+    pub fn delay_torque(&mut self, delay_s: &[f64], rate_hz: f64) {
+        if delay_s.iter().all(|d| *d == 0.0) || !(rate_hz > 0.0) {
+            return;
+        }
+        let n = self.dof;
+        let len = self.tau.len() / n.max(1);
+        if len == 0 {
+            return;
+        }
+        let old = self.tau.clone();
+        for (i, delay) in delay_s.iter().enumerate().take(n) {
+            let shift = delay * rate_hz;
+            if shift == 0.0 || !shift.is_finite() {
+                continue;
+            }
+            for k in 0..len {
+                let at = (k as f64 + shift).clamp(0.0, (len - 1) as f64);
+                let k0 = at.floor() as usize;
+                let k1 = (k0 + 1).min(len - 1);
+                let w = at - k0 as f64;
+                self.tau[k * n + i] = old[k0 * n + i] * (1.0 - w) + old[k1 * n + i] * w;
+            }
+        }
+    }
+}
+
+/// The sample rate of `data` (Hz) from its time column.
+pub fn sample_rate_hz(data: &FreeMotionData) -> f64 {
+    let span = data.t.last().copied().unwrap_or(0.0) - data.t.first().copied().unwrap_or(0.0);
+    if data.len() > 1 && span > 0.0 {
+        (data.len() - 1) as f64 / span
+    } else {
+        0.0
+    }
+}
+
+/// 90 % step-response time (s) of the conditioning at `cutoff_hz` sampled at `rate_hz` (0
+/// when it passes the signal through).
+pub fn conditioning_step_response_s(cutoff_hz: f64, rate_hz: f64) -> f64 {
+    if cutoff_hz <= 0.0 || rate_hz <= 0.0 || cutoff_hz >= 0.5 * rate_hz {
+        return 0.0;
+    }
+    let Ok(mut filter) = admittance_loop::LowPass::butterworth2(cutoff_hz, rate_hz, 1) else {
+        return 0.0;
+    };
+    // From rest at 0, a unit step: the filter starts in steady state at its first sample.
+    filter.update(0, 0.0);
+    for k in 1..(100.0 * rate_hz) as usize {
+        if filter.update(0, 1.0) >= 0.9 {
+            return k as f64 / rate_hz;
+        }
+    }
+    f64::INFINITY
+}
+
+/// One cut-off tried: its cut-off and the expected false torque (N m rms over joints).
+#[derive(Clone, Debug)]
+pub struct CutoffTrial {
+    /// Cut-off (Hz; 0: as recorded).
+    pub input_filter_hz: f64,
+    /// Expected false torque on held-out motion, rms over joints and samples (N m).
+    pub expected_false_torque_rms: f64,
+}
+
+/// Identifies `arm` from the first `rows` rows of `train` (all of `validation`, when
+/// given, chooses and scores), conditioned at `input_filter_hz`, or, when `None`, at the
+/// cut-off of [`CUTOFF_CANDIDATES_HZ`] with the lowest expected false torque. Returns the
+/// identification (its summary holding the cut-off, delay and step-response time) and
+/// every cut-off tried.
+pub fn identify_recording(
+    arm: &Model,
+    train: &FreeMotionData,
+    rows: usize,
+    validation: Option<&FreeMotionData>,
+    settings: &IdentificationSettings,
+    input_filter_hz: Option<f64>,
+) -> Result<(Identification, Vec<CutoffTrial>), String> {
+    let rate = sample_rate_hz(train);
+    let candidates: Vec<f64> = match input_filter_hz {
+        Some(f) => vec![f],
+        None => CUTOFF_CANDIDATES_HZ
+            .iter()
+            .copied()
+            .filter(|&f| f < 0.5 * rate)
+            .collect(),
+    };
+    let settings = IdentificationSettings {
+        sample_rate_hz: (rate > 0.0).then_some(rate),
+        ..settings.clone()
+    };
+    let mut best: Option<(f64, Identification)> = None;
+    let mut tried = Vec::new();
+    let mut last_error = String::new();
+    for cutoff in candidates {
+        let conditioned = ConditionedSamples::new(train, cutoff)
+            .map_err(|e| format!("input filter {cutoff} Hz: {e}"))?;
+        let samples = conditioned.samples().slice(0, rows.min(train.len()));
+        let held = match validation {
+            Some(v) => Some(
+                ConditionedSamples::new(v, cutoff)
+                    .map_err(|e| format!("input filter {cutoff} Hz, validation: {e}"))?,
+            ),
+            None => None,
+        };
+        let fitted = identify(arm, &samples, held.as_ref().map(|h| h.samples()).as_ref(), &settings);
+        let mut ident = match fitted {
+            Ok(i) => i,
+            Err(e) if input_filter_hz.is_none() => {
+                last_error = e.to_string();
+                continue;
+            }
+            Err(e) => return Err(e.to_string()),
+        };
+        let e = &ident.summary.expected_false_torque_rms;
+        let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64).sqrt();
+        tried.push(CutoffTrial {
+            input_filter_hz: cutoff,
+            expected_false_torque_rms: rms,
+        });
+        ident.summary.input_filter_hz = cutoff;
+        ident.summary.step_response_s =
+            conditioning_step_response_s(cutoff, rate)
+                + ident.summary.delay_s.iter().copied().fold(0.0, f64::max);
+        if best.as_ref().is_none_or(|(b, _)| rms < *b) {
+            best = Some((rms, ident));
+        }
+    }
+    match best {
+        Some((_, ident)) => Ok((ident, tried)),
+        None => Err(last_error),
+    }
+}

@@ -1,0 +1,321 @@
+"""`adm.identify` beside a plain least-squares fit on the same conditioned data (issue 30,
+item 4: never worse than least squares).
+
+Run through identify_vs_least_squares.sh (which makes the virtual environment and installs the
+package). Per recording and input cut-off (raw signals, 4 Hz, 10 Hz):
+
+1. The whole recording goes through the observers' input conditioning (`adm.InputConditioner`,
+   as `adm.identify(data, m, input_filter_hz=f)` conditions its data); the training stretch is
+   its first part, the scored stretch another part (or another recording) it never saw.
+2. The project: `adm.identify(train, m, input_filter_hz=f)` (one recording, no validation
+   recording: settings chosen as a user with one recording gets them), scored with
+   `ident.predict` on the conditioned scored rows.
+3. The baseline, plain least squares: Pinocchio's joint-torque regressor (10 inertial
+   parameters per body) plus per joint a rotor inertia (q''), viscous friction (q'), two
+   smooth Coulomb terms tanh(q'/w), tanh(q'/10w) (w = 0.01 rad/s, the project's default), an
+   offset and q, sin q, cos q; every column scaled to unit rms, a fixed ridge of 1e-3 (relative
+   to the rows) toward the URDF's inertial parameters and zero joint terms; one numpy solve.
+   Nothing is bounded or tuned on the scored rows.
+4. Printed per point: rms false torque (N m, all joints of the scored rows) of both, the ratio
+   project / least squares (the bar: <= 1.0), and whether every fitted joint term of the
+   project is physical (armature, viscous >= 0; coulomb[0] >= 0, coulomb[0] + coulomb[1] >= 0);
+   then the geometric mean of the ratios (the bar: <= 0.9).
+
+Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.csv: the first
+120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
+`admittance.mujoco.arms` in MuJoCo (60 s of `adm.excitation(m, 60, seed=1)` train, 30 s of
+other free motion, `seed=2`, are scored; the plant, sensors and PD of that table).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import pathlib
+import re
+import sys
+import time
+
+import numpy as np
+
+import admittance as adm
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+CUTOFFS_HZ = (0.0, 4.0, 10.0)
+COULOMB_WIDTH = 0.01  # rad/s, IdentificationSettings::default().coulomb_width
+RIDGE_REL = 1e-3
+JOINT_COLUMNS = 8  # q'', q', tanh(q'/w), tanh(q'/10w), 1, q, sin q, cos q
+
+
+def pinocchio_chain(urdf, joint_names):
+    """Pinocchio's model of the URDF reduced to the chain's joints (others locked at 0)."""
+    import pinocchio as pin
+
+    # Joints outside the chain become fixed (their bodies lumped at angle 0, as locking them
+    # would; some URDFs name a frame twice, which buildReducedModel refuses).
+    text = pathlib.Path(urdf).read_text()
+
+    def fix(match):
+        return match.group(0) if match.group(2) in joint_names else match.group(1) + "fixed" + match.group(3)
+
+    text = re.sub(r'(<joint\b[^>]*?\bname="([^"]+)"[^>]*?\btype=")[^"]+(")', fix, text)
+    text = re.sub(r'(<joint\b[^>]*?\btype=")[^"]+("[^>]*?\bname="([^"]+)")',
+                  lambda m: m.group(0) if m.group(3) in joint_names else m.group(1) + "fixed" + m.group(2), text)
+    model = pin.buildModelFromXML(text)
+    kept = [model.names[i] for i in range(1, model.njoints)]
+    if kept != list(joint_names) or model.nv != len(joint_names):
+        raise SystemExit(f"{urdf}: Pinocchio's chain {kept} is not the project's {list(joint_names)}")
+    return model
+
+
+def pinocchio_q(pmodel, q):
+    """Joint angles as Pinocchio's configuration: a continuous joint (2 coordinates) is
+    ``(cos q, sin q)``."""
+    parts = []
+    for j in range(1, pmodel.njoints):
+        a = q[:, j - 1 : j]
+        parts.append(np.hstack([np.cos(a), np.sin(a)]) if pmodel.joints[j].nq == 2 else a)
+    return np.hstack(parts)
+
+
+def body_regressor(pmodel, q, qd, qdd):
+    """Pinocchio's joint-torque regressor, rows stacked: ``(N n, 10 n)``."""
+    import pinocchio as pin
+
+    data = pmodel.createData()
+    n = pmodel.nv
+    qp = pinocchio_q(pmodel, np.asarray(q))
+    out = np.empty((len(q) * n, 10 * n))
+    for k in range(len(q)):
+        out[k * n : (k + 1) * n] = pin.computeJointTorqueRegressor(pmodel, data, qp[k], qd[k], qdd[k])
+    return out
+
+
+def joint_regressor(q, qd, qdd):
+    """The per-joint columns, rows stacked like ``body_regressor``: ``(N n, 8 n)``."""
+    rows, n = q.shape
+    out = np.zeros((rows, n, JOINT_COLUMNS * n))
+    cols = np.stack(
+        [
+            qdd,
+            qd,
+            np.tanh(qd / COULOMB_WIDTH),
+            np.tanh(qd / (10 * COULOMB_WIDTH)),
+            np.ones_like(q),
+            q,
+            np.sin(q),
+            np.cos(q),
+        ],
+        axis=2,
+    )  # (N, n, 8)
+    for j in range(n):
+        out[:, j, JOINT_COLUMNS * j : JOINT_COLUMNS * (j + 1)] = cols[:, j, :]
+    return out.reshape(rows * n, JOINT_COLUMNS * n)
+
+
+class LeastSquares:
+    """The plain baseline: one ridge-regularised linear solve toward the URDF."""
+
+    def __init__(self, pmodel):
+        self.pmodel = pmodel
+        n = pmodel.nv
+        urdf = np.concatenate([pmodel.inertias[j].toDynamicParameters() for j in range(1, n + 1)])
+        self.prior = np.concatenate([urdf, np.zeros(JOINT_COLUMNS * n)])
+
+    def regressor(self, q, qd, qdd):
+        return np.hstack([body_regressor(self.pmodel, q, qd, qdd), joint_regressor(q, qd, qdd)])
+
+    def fit(self, q, qd, qdd, tau):
+        phi = self.regressor(q, qd, qdd)
+        y = tau.reshape(-1)
+        scale = np.sqrt(np.mean(phi**2, axis=0))
+        scale[scale < 1e-9 * scale.max()] = 1.0  # a column that is zero: the ridge holds it
+        a = phi / scale
+        lam = RIDGE_REL * len(y)
+        prior = self.prior * scale
+        lhs = a.T @ a + lam * np.eye(a.shape[1])
+        rhs = a.T @ y + lam * prior
+        self.theta = np.linalg.solve(lhs, rhs) / scale
+        return self
+
+    def predict(self, q, qd, qdd):
+        return (self.regressor(q, qd, qdd) @ self.theta).reshape(q.shape)
+
+    def joint_terms(self):
+        n = self.pmodel.nv
+        c = self.theta[10 * n :].reshape(n, JOINT_COLUMNS)
+        return [{"armature": r[0], "viscous": r[1], "coulomb": [r[2], r[3]]} for r in c]
+
+
+def physical(terms):
+    """Every joint's armature and viscous >= 0, coulomb[0] >= 0, coulomb[0] + coulomb[1] >= 0."""
+    return all(
+        t["armature"] >= 0 and t["viscous"] >= 0 and t["coulomb"][0] >= 0 and t["coulomb"][0] + t["coulomb"][1] >= 0
+        for t in terms
+    )
+
+
+def condition(data, hz):
+    """The recording through ``adm.InputConditioner`` (``hz`` 0: the columns as recorded)."""
+    if hz <= 0:
+        return {k: np.asarray(data[k], dtype=float) for k in ("q", "qdot", "qddot", "tau")}
+    n = data["q"].shape[1]
+    t = np.asarray(data["t"])
+    rate = (len(t) - 1) / (t[-1] - t[0])
+    cond = adm.InputConditioner(n, hz, rate)
+    out = {k: np.zeros_like(data["q"]) for k in ("q", "qdot", "qddot", "tau")}
+    for k in range(len(t)):
+        out["q"][k], out["qdot"][k], out["qddot"][k], out["tau"][k] = cond.update(data["q"][k], data["tau"][k])
+    return out
+
+
+def delay_torque(tau, delay_s, rate):
+    """Each joint's torque ``delay_s[i]`` later (linear interpolation, held at the ends): the
+    pairing an identification with those delays expects (``ConditionedSamples::delay_torque``)."""
+    if not delay_s or all(d == 0 for d in delay_s):
+        return tau
+    k = np.arange(len(tau), dtype=float)
+    return np.stack(
+        [np.interp(np.clip(k + d * rate, 0, len(tau) - 1), k, tau[:, i]) for i, d in enumerate(delay_s)], axis=1
+    )
+
+
+def rows(data, mask):
+    return {k: np.asarray(v)[mask] for k, v in data.items() if k in ("t", "q", "qdot", "qddot", "tau")}
+
+
+def rms(x):
+    return float(np.sqrt(np.mean(np.asarray(x) ** 2)))
+
+
+def compare(label, m, pmodel, train, scored, log):
+    """Both fits at every cut-off: ``train`` and ``scored`` are raw recordings; ``scored``
+    may carry ``score_mask`` (rows of it that are scored, after conditioning it whole)."""
+    points = []
+    for hz in CUTOFFS_HZ:
+        t0 = time.perf_counter()
+        ident = adm.identify(train, m, input_filter_hz=hz)
+        seconds = time.perf_counter() - t0
+        ct = condition(train, hz)
+        cs = condition(scored["data"], hz)
+        w = scored["mask"]
+        q, qd, qdd, tau = (cs[k][w] for k in ("q", "qdot", "qddot", "tau"))
+        # The identification is scored on the torque paired with the motion as it was fitted
+        # (its delays, when it records any), as its consumers run it.
+        t = np.asarray(scored["data"]["t"])
+        delays = list(ident.summary.get("delay_s") or [])
+        tau_id = delay_torque(cs["tau"], delays, (len(t) - 1) / (t[-1] - t[0]))[w]
+        project = rms(tau_id - np.asarray(ident.predict(q, qd, qdd)))
+        ls = LeastSquares(pmodel).fit(ct["q"], ct["qdot"], ct["qddot"], ct["tau"])
+        baseline = rms(tau - ls.predict(q, qd, qdd))
+        summary = ident.summary
+        point = {
+            "recording": label,
+            "input_filter_hz": hz,
+            "project_rms": project,
+            "least_squares_rms": baseline,
+            "ratio": project / baseline,
+            "project_physical": physical(ident.joint_terms),
+            "least_squares_physical": physical(ls.joint_terms()),
+            "identify_seconds": seconds,
+            "chosen_input_filter_hz": summary.get("input_filter_hz"),
+            "delay_s": summary.get("delay_s"),
+        }
+        points.append(point)
+        log(
+            f"{label:<28} {'raw' if hz == 0 else f'{hz:g} Hz':>6} {project:8.3f} {baseline:8.3f} {point['ratio']:7.3f}"
+            f"  {'yes' if point['project_physical'] else 'NO':>8}  ({'yes' if point['least_squares_physical'] else 'no'})"
+        )
+    return points
+
+
+def baxter(log):
+    folder = os.environ.get("ADMITTANCE_DATA")
+    path = pathlib.Path(folder or "") / "baxter_rand" / "baxter_rand.csv"
+    if not folder or not path.is_file():
+        log(f"Baxter: {path} not found (set ADMITTANCE_DATA): skipped")
+        return []
+    urdf = ROOT / "models" / "baxter_left_arm.urdf"
+    m = adm.Model.from_urdf(str(urdf))
+    header = path.read_text().splitlines()[0].split(",")
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    col = {name.strip(): i for i, name in enumerate(header)}
+    data = {"t": table[:, col["t"]]}
+    for key in ("q", "qdot", "qddot", "tau"):
+        data[key] = np.stack([table[:, col[f"{key}.{j}"]] for j in m.joint_names], axis=1)
+    t = data["t"]
+    train = rows(data, t < 120.0)
+    scored = {"data": data, "mask": t >= t[-1] - 30.0 + 1e-9}
+    return compare("Baxter (real), 120 s -> 30 s", m, pinocchio_chain(urdf, m.joint_names), train, scored, log)
+
+
+def mujoco_arm(name, log, cfg):
+    from admittance.mujoco import _arms
+    from admittance.mujoco._plant import MujocoArm
+
+    rel, base, tip = _arms.ARMS[name]
+    path = _arms.robots_dir() / rel
+    m = adm.Model.from_urdf(str(path), base=base, tip=tip)
+    tip = tip or m.tip_link
+    arm = MujocoArm(path.read_text(), m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale)
+    train_motion, _ = _arms.excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
+    eval_motion, _ = _arms.excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
+    gains = _arms.recording_gains(m, train_motion["q"].mean(axis=0), arm.terms)
+    rng = np.random.default_rng(cfg.seed)
+    train, _, _ = _arms.record(arm, m, train_motion, gains, cfg, rng)
+    free, _, _ = _arms.record(arm, m, eval_motion, gains, cfg, rng)
+    scored = {"data": free, "mask": free["t"] >= cfg.evaluation_start}
+    pmodel = pinocchio_chain(path, m.joint_names)
+    check_regressor(m, pmodel, train, name)
+    return compare(f"MuJoCo {name}", m, pmodel, train, scored, log)
+
+
+def check_regressor(m, pmodel, data, label):
+    """Pinocchio's regressor times the URDF's parameters is the project's RNEA (same model)."""
+    ls = LeastSquares(pmodel)
+    k = np.linspace(0, len(data["t"]) - 1, 20).astype(int)
+    q, qd, qdd = (np.asarray(data[key])[k] for key in ("q", "qdot", "qddot"))
+    n = pmodel.nv
+    pin_tau = (body_regressor(pmodel, q, qd, qdd) @ ls.prior[: 10 * n]).reshape(q.shape)
+    ours = np.array([adm.rnea(m, q[i], qd[i], qdd[i]) for i in range(len(k))])
+    if not np.allclose(pin_tau, ours, rtol=1e-6, atol=1e-6 * (1 + np.abs(ours).max())):
+        raise SystemExit(f"{label}: Pinocchio's regressor and the project's RNEA differ by {np.abs(pin_tau - ours).max():.3g} N m")
+
+
+def main():
+    from admittance.mujoco import _arms
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--arms", nargs="*", default=list(_arms.ARMS), help="MuJoCo arms (default: all of the arms table)")
+    parser.add_argument("--no-baxter", action="store_true", help="leave out the real Baxter recording")
+    parser.add_argument("--training-duration", type=float, default=60.0, help="MuJoCo training recording (s)")
+    parser.add_argument("--evaluation-duration", type=float, default=30.0, help="MuJoCo scored recording (s)")
+    parser.add_argument("--json", help="write every point to this file")
+    args = parser.parse_args()
+    cfg = _arms.ArmsConfig(training_duration=args.training_duration, evaluation_duration=args.evaluation_duration)
+
+    def log(text):
+        print(text, flush=True)
+
+    log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
+    points = [] if args.no_baxter else baxter(log)
+    for name in args.arms:
+        points += mujoco_arm(name, log, cfg)
+    ratios = [p["ratio"] for p in points]
+    if not ratios:
+        sys.exit("no recording")
+    geo = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
+    worse = [p for p in points if p["ratio"] > 1.0]
+    unphysical = [p for p in points if not p["project_physical"]]
+    log(f"geometric mean of the ratios: {geo:.3f} over {len(ratios)} points (bar: <= 0.900)")
+    log(f"points with ratio > 1.0: {len(worse)}" + "".join(
+        f"\n  {p['recording']} at {'raw' if p['input_filter_hz'] == 0 else str(p['input_filter_hz']) + ' Hz'}: {p['ratio']:.3f}" for p in worse))
+    log(f"points whose fitted joint terms are not physical: {len(unphysical)}")
+    if args.json:
+        pathlib.Path(args.json).write_text(json.dumps({"points": points, "geometric_mean": geo}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
