@@ -18,7 +18,8 @@ package). Per recording and input cut-off (raw signals, 4 Hz, 10 Hz):
    Nothing is bounded or tuned on the scored rows.
 4. Printed per point: rms false torque (N m, all joints of the scored rows) of both, the ratio
    project / least squares (the bar: <= 1.0), and whether every fitted joint term of the
-   project is physical (armature, viscous >= 0; coulomb[0] >= 0, coulomb[0] + coulomb[1] >= 0);
+   project is physical (armature, viscous >= 0; a friction that opposes the velocity at every speed:
+   coulomb[0] + coulomb[1] >= 0 and 10 coulomb[0] + coulomb[1] >= 0);
    then the geometric mean of the ratios (the bar: <= 0.9).
 
 Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.csv: the first
@@ -150,9 +151,9 @@ class LeastSquares:
 
 
 def physical(terms):
-    """Every joint's armature and viscous >= 0, coulomb[0] >= 0, coulomb[0] + coulomb[1] >= 0."""
+    """Every joint's armature and viscous >= 0, coulomb[0] + coulomb[1] >= 0 and 10 coulomb[0] + coulomb[1] >= 0."""
     return all(
-        t["armature"] >= 0 and t["viscous"] >= 0 and t["coulomb"][0] >= 0 and t["coulomb"][0] + t["coulomb"][1] >= 0
+        t["armature"] >= 0 and t["viscous"] >= 0 and t["coulomb"][0] + t["coulomb"][1] >= -1e-9 and 10 * t["coulomb"][0] + t["coulomb"][1] >= -1e-9
         for t in terms
     )
 

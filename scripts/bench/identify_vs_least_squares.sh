@@ -8,7 +8,8 @@
 # arguments given (e.g. --arms panda ur5 --no-baxter --json out.json).
 #
 # Environment: PYTHON (default python3); ADMITTANCE_DATA, the folder holding
-# baxter_rand/baxter_rand.csv (default: ../shared/data beside the checkout, when present).
+# baxter_rand/baxter_rand.csv (default: ../shared/data beside the checkout, when present);
+# SKIP_PACKAGE_BUILD=1 keeps the package already installed in .venv-bench.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 VENV="$ROOT/.venv-bench"

@@ -54,7 +54,7 @@ fn as_float_array<'py>(
     let kind: String = dtype.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "f" | "i" | "u") {
         return Err(PyTypeError::new_err(format!(
-            "`{name}` has dtype {} (numpy kind '{kind}'): give numbers (a float64 array, or integers or float32 to convert)",
+            "`{name}` must be a float64 array-like of shape {expected}: it has dtype {} (numpy kind '{kind}'); give numbers (floats, or integers to convert)",
             dtype.str()?
         )));
     }

@@ -26,15 +26,19 @@ fn ros2_bridge_arguments_and_refusals() {
         "{out}"
     );
     // KUKA's LBRState topic cannot be subscribed to: a bad input, named.
+    let dir = tempfile::tempdir().unwrap();
+    let deployed = dir.path().join("deployed");
+    let deployed = deployed.to_str().unwrap();
     let (code, _, err) = admittance(&[
-        "ros2",
-        "bridge",
+        "deploy",
         "scenarios/panda_admittance.toml",
         "--variant",
         "momentum",
-        "--profile",
-        "lbr",
+        "--out",
+        deployed,
     ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = admittance(&["ros2", "bridge", deployed, "--profile", "lbr"]);
     assert_eq!(code, 3, "{err}");
     assert!(
         err.contains("/lbr/state") && err.contains("/lbr/joint_states"),
@@ -43,9 +47,12 @@ fn ros2_bridge_arguments_and_refusals() {
     let (code, _, err) = admittance(&["ros2", "bridge", "no/such.toml", "--distro", "foxy"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--distro `foxy`"), "{err}");
-    let (code, _, err) = admittance(&["ros2", "bridge", "no/such.toml"]);
+    let (code, _, err) = admittance(&["ros2", "bridge", "no/such"]);
     assert_eq!(code, 3, "{err}");
-    assert!(err.contains("no/such.toml"), "{err}");
+    assert!(
+        err.contains("no/such") && err.contains("admittance deploy"),
+        "{err}"
+    );
 }
 
 #[cfg(not(feature = "ros2"))]

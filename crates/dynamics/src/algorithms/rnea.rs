@@ -58,10 +58,10 @@ pub fn gravity_torque<'d>(
 }
 
 /// `M(q)`, `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
-/// `data.mass_matrix`, `data.nonlinear_effects` and `data.gravity_torque`: the same values
-/// as [`crate::crba`], [`nonlinear_effects`] and [`gravity_torque`] called one after the
-/// other (the same operations), with the joint placements computed once instead of three
-/// times. What a forward-dynamics step with an implicit solve needs.
+/// `data.mass_matrix`, `data.nonlinear_effects` and `data.gravity_torque`: the values of
+/// [`crate::crba`] (within rounding: the composite-body pass), [`nonlinear_effects`] and
+/// [`gravity_torque`] called one after the other, with the joint placements computed once
+/// instead of three times. What a forward-dynamics step with an implicit solve needs.
 pub fn mass_matrix_and_bias(
     model: &Model,
     data: &mut Data,
@@ -73,7 +73,7 @@ pub fn mass_matrix_and_bias(
     check_len("q", q, n)?;
     check_len("v", v, n)?;
     update_joint_placements(model, data, q);
-    crate::algorithms::crba::crba_pass(model, data);
+    crate::algorithms::crba::crba_pass_composite(model, data);
     rnea_pass_at_placements(model, data, Some(v), None, None);
     data.nonlinear_effects.copy_from(&data.tau);
     if gravity {

@@ -1,9 +1,12 @@
 //! The identification least squares over physically possible arms only (issue 30): each
 //! body in log-Cholesky coordinates (`consistency.rs`), and each joint's rotor inertia,
 //! viscous friction and friction curve kept dissipative by bounds (`JointTerms::is_physical`:
-//! `I_a >= 0`, `F_v >= 0`, `F_c1 >= 0`, `F_c1 + F_c2 >= 0`), minimised together by a
+//! `I_a >= 0`, `F_v >= 0`, a friction curve that opposes the velocity at every speed),
+//! minimised together by a
 //! projected Levenberg-Marquardt on the normal equations (the cost is quadratic in the
-//! parameters, so each step needs only the Gram matrix, never the samples). The bounds are
+//! parameters, so each step needs only the Gram matrix, never the samples). The two Coulomb
+//! levels live in the coordinates `t = 10 F_c1 + F_c2` and `u = F_c1 + F_c2`, both `>= 0`:
+//! exactly the curves that oppose the velocity at every speed. The bounds are
 //! part of the fit, not a clipping afterwards: a bound that binds hands its share of the
 //! torque to the other terms.
 
@@ -44,12 +47,13 @@ enum Body {
 }
 
 /// The free coordinates `z` of the reduced solution `x`: the bodies (see [`Body`]), then
-/// the active joint columns. Joint coordinates are `x` itself except the second Coulomb
-/// level, whose coordinate is the sum `F_c1 + F_c2`, so that every joint bound is `z >= 0`.
+/// the active joint columns. Joint coordinates are `x` itself except the two Coulomb
+/// levels, whose coordinates are `t = 10 F_c1 + F_c2` (at the first) and `u = F_c1 + F_c2`
+/// (at the second), so that every joint bound is `z >= 0`.
 struct Coordinates {
     bodies: Vec<Body>,
-    /// Per joint coordinate (from `first_joint_z`): the coordinate it is offset by
-    /// (`x = z - z[pair]`), for the second Coulomb level.
+    /// Per joint coordinate (from `first_joint_z`): for the second Coulomb level's (`u`),
+    /// the coordinate of the first's (`t`).
     pair: Vec<Option<usize>>,
     /// Per coordinate of `z`: bounded below by zero.
     bounded: Vec<bool>,
@@ -135,7 +139,9 @@ impl Coordinates {
         }
         for j in 0..self.pair.len() {
             if let Some(p) = self.pair[j] {
-                z[self.first_joint_z + j] += z[p];
+                let (c1, c2) = (x[self.x_of(p)], x[self.first_joint_x + j]);
+                z[p] = 10.0 * c1 + c2;
+                z[self.first_joint_z + j] = c1 + c2;
             }
         }
         self.project(&mut z);
@@ -168,11 +174,22 @@ impl Coordinates {
                 }
             }
         }
+        for j in 0..self.pair.len() {
+            x[self.first_joint_x + j] = z[self.first_joint_z + j];
+        }
         for (j, pair) in self.pair.iter().enumerate() {
-            let offset = pair.map_or(0.0, |p| z[p]);
-            x[self.first_joint_x + j] = z[self.first_joint_z + j] - offset;
+            if let Some(p) = *pair {
+                let (t, u) = (z[p], z[self.first_joint_z + j]);
+                x[self.x_of(p)] = (t - u) / 9.0;
+                x[self.first_joint_x + j] = (10.0 * u - t) / 9.0;
+            }
         }
         x
+    }
+
+    /// The row of `x` of joint coordinate `z` index `zi`.
+    fn x_of(&self, zi: usize) -> usize {
+        self.first_joint_x + (zi - self.first_joint_z)
     }
 
     /// `dx/dz` (the consistent bodies' 10 x 10 blocks by central differences).
@@ -202,10 +219,16 @@ impl Coordinates {
                 }
             }
         }
-        for (j, pair) in self.pair.iter().enumerate() {
+        for j in 0..self.pair.len() {
             jac[(self.first_joint_x + j, self.first_joint_z + j)] = 1.0;
+        }
+        for (j, pair) in self.pair.iter().enumerate() {
             if let Some(p) = *pair {
-                jac[(self.first_joint_x + j, p)] = -1.0;
+                let (xt, xu, zu) = (self.x_of(p), self.first_joint_x + j, self.first_joint_z + j);
+                jac[(xt, p)] = 1.0 / 9.0;
+                jac[(xt, zu)] = -1.0 / 9.0;
+                jac[(xu, p)] = -1.0 / 9.0;
+                jac[(xu, zu)] = 10.0 / 9.0;
             }
         }
         jac
