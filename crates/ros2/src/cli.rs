@@ -216,7 +216,8 @@ fn duration(flag: &str, s: f64) -> Result<Duration, Failure> {
 fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value)
         .map_err(|e| failed(format!("{}: {e}", path.display())))?;
-    std::fs::write(path, text + "\n")
+    // Atomically, never through a planted link (issue 34).
+    admittance_files::write_atomic(path, (text + "\n").as_bytes())
         .map_err(|e| failed(format!("cannot write {}: {e}", path.display())))
 }
 

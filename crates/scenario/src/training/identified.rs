@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use admittance_dynamics::{identify, Identification, IdentificationSettings, Model, Samples};
+use admittance_dynamics::{identify, Identification, IdentificationSettings, Model};
 use admittance_learning::broad::fnv1a64;
 
 use super::data::{data_source, load_data};
@@ -16,7 +16,7 @@ use crate::context::Ctx;
 use crate::error::ScenarioError;
 use crate::progress::{RunOptions, Stage};
 use crate::spec::Scenario;
-use crate::FreeMotionData;
+use crate::identify_recording::ConditionedSamples;
 
 /// Version of what an identification cache key stands for (bump when it changes).
 const IDENTIFICATION_KEY_VERSION: u32 = 1;
@@ -31,47 +31,6 @@ pub struct IdentifiedNominal {
     pub checksum: u64,
     /// Whether it was read from an earlier run instead of fitted now.
     pub cached: bool,
-}
-
-/// The conditioned samples (`[q, q', q'']` through the observers' input filter) of a data
-/// set, as the identification takes them.
-struct Conditioned {
-    q: Vec<f64>,
-    qdot: Vec<f64>,
-    qddot: Vec<f64>,
-    tau: Vec<f64>,
-    dof: usize,
-}
-
-impl Conditioned {
-    fn new(data: &FreeMotionData, input_filter_hz: f64) -> Result<Self, String> {
-        let n = data.dof();
-        let (x, tau) = crate::free_motion::observer_training_arrays(data, input_filter_hz)
-            .map_err(|e| e.to_string())?;
-        let mut out = Conditioned {
-            q: Vec::with_capacity(tau.len()),
-            qdot: Vec::with_capacity(tau.len()),
-            qddot: Vec::with_capacity(tau.len()),
-            tau,
-            dof: n,
-        };
-        for row in x.chunks_exact(3 * n) {
-            out.q.extend_from_slice(&row[..n]);
-            out.qdot.extend_from_slice(&row[n..2 * n]);
-            out.qddot.extend_from_slice(&row[2 * n..]);
-        }
-        Ok(out)
-    }
-
-    fn samples(&self) -> Samples<'_> {
-        Samples {
-            q: &self.q,
-            qdot: &self.qdot,
-            qddot: &self.qddot,
-            tau: &self.tau,
-            dof: self.dof,
-        }
-    }
 }
 
 /// The identification of `arm` from the scenario's training data (validation: its
@@ -123,9 +82,9 @@ pub(crate) fn identified_nominal(
     let key_err = |message: String| ctx.err("observer.training.identify", message, None);
     let train = load_data(ctx, &train_src, &arm_joints, options, simulate)?;
     let validation = load_data(ctx, &val_src, &arm_joints, options, simulate)?;
-    let train = Conditioned::new(&train, filter)
+    let train = ConditionedSamples::new(&train, filter)
         .map_err(|e| key_err(format!("with the data of observer.training.data: {e}")))?;
-    let validation = Conditioned::new(&validation, filter).map_err(|e| {
+    let validation = ConditionedSamples::new(&validation, filter).map_err(|e| {
         key_err(format!(
             "with the data of observer.training.validation: {e}"
         ))
