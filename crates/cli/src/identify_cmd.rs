@@ -216,7 +216,10 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         "validation".into(),
         json!(args.validation.as_ref().map(|p| p.display().to_string())),
     );
-    provenance.insert("input_filter_hz".into(), json!(ident.summary.input_filter_hz));
+    provenance.insert(
+        "input_filter_hz".into(),
+        json!(ident.summary.input_filter_hz),
+    );
     provenance.insert(
         "input_filters_tried".into(),
         json!(tried
@@ -237,7 +240,11 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     if tried.len() > 1 {
         text += "input filter chosen on held-out motion (expected false torque, rms N m):";
         for t in &tried {
-            text += &format!(" {}: {:.3};", filter_name(t.input_filter_hz), t.expected_false_torque_rms);
+            text += &format!(
+                " {}: {:.3};",
+                filter_name(t.input_filter_hz),
+                t.expected_false_torque_rms
+            );
         }
         text += "\n";
     }

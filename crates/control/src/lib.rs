@@ -64,9 +64,9 @@ pub use admittance::{
 pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, PdController};
 pub use config::{AxisValues, JointValues};
 pub use contact::{
-    calibrate_contact, calibrate_contact_with, ContactCalibration, ContactCalibrationConfig,
-    ContactDetector, ContactFloor, ContactState, CONTACT_FLOOR_FORMAT,
-    CONTACT_FLOOR_FORMAT_VERSION, soft_deadband, DEADBAND_KNEE,
+    calibrate_contact, calibrate_contact_with, soft_deadband, ContactCalibration,
+    ContactCalibrationConfig, ContactDetector, ContactFloor, ContactState, CONTACT_FLOOR_FORMAT,
+    CONTACT_FLOOR_FORMAT_VERSION, DEADBAND_KNEE,
 };
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};

@@ -52,11 +52,11 @@ pub use algorithms::rnea::{
 pub use data::Data;
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use identification::{
-    excitation, identify, is_physically_consistent, BaseParameters, Excitation, ExcitationSettings,
-    FourierSeries, Identification, IdentificationFile, IdentificationSettings,
-    IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_VELOCITY_LIMIT,
-    identify_payload, DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION,
-    IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION,
+    excitation, identify, identify_payload, is_physically_consistent, BaseParameters, Excitation,
+    ExcitationSettings, FourierSeries, Identification, IdentificationFile, IdentificationSettings,
+    IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_EXCITATION_RANGE,
+    DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT, IDENTIFICATION_FORMAT,
+    IDENTIFICATION_FORMAT_VERSION,
 };
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,

@@ -102,7 +102,10 @@ fn create_errors_name_what_is_wrong() {
     );
 
     let missing = CString::new("no/such/folder").unwrap();
-    create_fails(&config(&missing), &["no/such/folder", "admittance deploy", "manifest.json"]);
+    create_fails(
+        &config(&missing),
+        &["no/such/folder", "admittance deploy", "manifest.json"],
+    );
 
     // A scenario file is refused with the command that deploys it.
     let scenario = CString::new(concat!(
@@ -118,7 +121,16 @@ fn create_errors_name_what_is_wrong() {
     let overrides = CString::new("controller.pd.kp = [1.0, 2.0]").unwrap();
     let mut c = config(&path);
     c.overrides = overrides.as_ptr();
-    create_fails(&c, &["loop.toml", "controller.pd", "kp", "has 2 values", "7 joints"]);
+    create_fails(
+        &c,
+        &[
+            "loop.toml",
+            "controller.pd",
+            "kp",
+            "has 2 values",
+            "7 joints",
+        ],
+    );
 
     let overrides = CString::new("observer.kind = \"oracle\"").unwrap();
     let mut c = config(&path);

@@ -55,7 +55,10 @@ fn temp_name(path: &Path) -> PathBuf {
 /// followed, never replaced), a folder, a FIFO, a device, a socket.
 fn check_destination(path: &Path) -> std::io::Result<()> {
     if path.file_name().is_none() {
-        return Err(Error::new(ErrorKind::InvalidInput, "names a folder, not a file"));
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "names a folder, not a file",
+        ));
     }
     match std::fs::symlink_metadata(path) {
         Ok(meta) if meta.is_file() => Ok(()),

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use admittance_dynamics::{
-    excitation as rust_excitation, Data, ExcitationSettings,
-    Identification, IdentificationSettings, Model, Samples,
+    excitation as rust_excitation, Data, ExcitationSettings, Identification,
+    IdentificationSettings, Model, Samples,
 };
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -16,8 +16,8 @@ use pyo3::types::PyDict;
 
 use crate::convert::{rows, value_error, vector_out};
 use crate::free_motion::{data_arg, training_arrays, DataArg};
-use admittance_scenario::FreeMotionData;
 use crate::model::PyModel;
+use admittance_scenario::FreeMotionData;
 
 /// An identified arm (`identify`, `load_identification`): the rigid-body `model` with its
 /// identified inertias, and per-joint rotor inertia, friction, offset and springs.

@@ -31,7 +31,8 @@ impl ConditionedSamples {
     /// `data` through the conditioning at `input_filter_hz` (0: as recorded).
     pub fn new(data: &FreeMotionData, input_filter_hz: f64) -> Result<Self, String> {
         let n = data.dof();
-        let (x, tau) = observer_training_arrays(data, input_filter_hz).map_err(|e| e.to_string())?;
+        let (x, tau) =
+            observer_training_arrays(data, input_filter_hz).map_err(|e| e.to_string())?;
         let mut out = ConditionedSamples {
             q: Vec::with_capacity(tau.len()),
             qdot: Vec::with_capacity(tau.len()),
@@ -165,7 +166,12 @@ pub fn identify_recording(
             ),
             None => None,
         };
-        let fitted = identify(arm, &samples, held.as_ref().map(|h| h.samples()).as_ref(), &settings);
+        let fitted = identify(
+            arm,
+            &samples,
+            held.as_ref().map(|h| h.samples()).as_ref(),
+            &settings,
+        );
         let mut ident = match fitted {
             Ok(i) => i,
             Err(e) if input_filter_hz.is_none() => {
@@ -181,9 +187,8 @@ pub fn identify_recording(
             expected_false_torque_rms: rms,
         });
         ident.summary.input_filter_hz = cutoff;
-        ident.summary.step_response_s =
-            conditioning_step_response_s(cutoff, rate)
-                + ident.summary.delay_s.iter().copied().fold(0.0, f64::max);
+        ident.summary.step_response_s = conditioning_step_response_s(cutoff, rate)
+            + ident.summary.delay_s.iter().copied().fold(0.0, f64::max);
         if best.as_ref().is_none_or(|(b, _)| rms < *b) {
             best = Some((rms, ident));
         }

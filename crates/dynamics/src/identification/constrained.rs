@@ -122,7 +122,9 @@ impl Coordinates {
         let mut z = DVector::zeros(z_len);
         for (b, slot) in self.bodies.iter().enumerate() {
             let mut p = [0.0; PARAMETERS_PER_BODY];
-            p.copy_from_slice(&x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
+            p.copy_from_slice(
+                &x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
+            );
             match *slot {
                 Body::Fixed => {}
                 Body::Consistent { start, margin } => {

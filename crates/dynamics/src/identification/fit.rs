@@ -175,7 +175,10 @@ impl Held<'_> {
 
 /// The candidate with the lowest score (`(NaN, inf)` when none is finite).
 fn best_of<T>(candidates: impl Iterator<Item = (T, f64)>, none: T) -> (T, f64) {
-    candidates.fold((none, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best })
+    candidates.fold(
+        (none, f64::INFINITY),
+        |best, c| if c.1 < best.1 { c } else { best },
+    )
 }
 
 /// Identifies `model`'s inertial parameters and joint terms from free-motion `train`
@@ -360,12 +363,21 @@ pub fn identify(
     let held_out = match &held {
         Held::Recording { samples, .. } => {
             let tau = shifted(samples);
-            add_errors(&identified, &Samples { tau: &tau, ..*samples })?;
+            add_errors(
+                &identified,
+                &Samples {
+                    tau: &tau,
+                    ..*samples
+                },
+            )?;
             "validation recording".to_string()
         }
         Held::Folds { blocks, total } => {
             let tau = shifted(train);
-            let train = Samples { tau: &tau, ..*train };
+            let train = Samples {
+                tau: &tau,
+                ..*train
+            };
             let total = total.at(signals.gain, &signals.shifts);
             for (b, block) in blocks.iter().enumerate() {
                 let mut rest = total.clone();

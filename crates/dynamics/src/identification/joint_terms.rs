@@ -106,10 +106,16 @@ impl JointTerms {
             return Some("a coefficient is not finite or the Coulomb width is not positive".into());
         }
         if self.armature < 0.0 {
-            return Some(format!("rotor inertia {} kg m^2 is negative", self.armature));
+            return Some(format!(
+                "rotor inertia {} kg m^2 is negative",
+                self.armature
+            ));
         }
         if self.viscous < 0.0 {
-            return Some(format!("viscous friction {} N m s/rad is negative", self.viscous));
+            return Some(format!(
+                "viscous friction {} N m s/rad is negative",
+                self.viscous
+            ));
         }
         let [c1, c2] = self.coulomb;
         let slack = -1e-9 * (c1.abs() + c2.abs()) - 1e-12;

@@ -307,9 +307,33 @@ pub(crate) fn accumulate_parts(
             let m = (end - k).min(BATCH);
             for s in 0..m {
                 let (q, qd, qdd, _) = samples.row(k + s);
-                rows_at(model, &mut data, q, qd, &zeros, width, &mut w0.view_mut((s * n, 0), (n, p)))?;
-                rows_at(model, &mut data, q, &zeros, qdd, width, &mut wa.view_mut((s * n, 0), (n, p)))?;
-                rows_at(model, &mut data, q, &zeros, &zeros, width, &mut scratch.view_mut((0, 0), (n, p)))?;
+                rows_at(
+                    model,
+                    &mut data,
+                    q,
+                    qd,
+                    &zeros,
+                    width,
+                    &mut w0.view_mut((s * n, 0), (n, p)),
+                )?;
+                rows_at(
+                    model,
+                    &mut data,
+                    q,
+                    &zeros,
+                    qdd,
+                    width,
+                    &mut wa.view_mut((s * n, 0), (n, p)),
+                )?;
+                rows_at(
+                    model,
+                    &mut data,
+                    q,
+                    &zeros,
+                    &zeros,
+                    width,
+                    &mut scratch.view_mut((0, 0), (n, p)),
+                )?;
                 let mut block = wa.view_mut((s * n, 0), (n, p));
                 block -= &scratch;
                 for i in 0..n {

@@ -101,5 +101,8 @@ fn negative_joint_terms_are_refused_naming_the_joint() {
         "{e}"
     );
     let e = load_edited(dir.path(), |p| p["joint_terms"][0]["offset"] = 1e12.into()).unwrap_err();
-    assert!(e.contains("joint_terms[0]") && e.contains("1e12") && e.contains("beyond"), "{e}");
+    assert!(
+        e.contains("joint_terms[0]") && e.contains("1e12") && e.contains("beyond"),
+        "{e}"
+    );
 }

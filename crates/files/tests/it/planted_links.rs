@@ -11,13 +11,19 @@ fn a_link_planted_at_the_old_predictable_temporary_name_is_not_followed() {
     let out = dir.path().join("ident.json");
     // The names the tool used to write through: `.NAME.tmp-PID` and `.NAME.tmpPID`.
     let pid = std::process::id();
-    for name in [format!(".ident.json.tmp-{pid}"), format!(".ident.json.tmp{pid}")] {
+    for name in [
+        format!(".ident.json.tmp-{pid}"),
+        format!(".ident.json.tmp{pid}"),
+    ] {
         symlink(&victim, dir.path().join(name)).unwrap();
     }
     write_atomic(&out, b"new").unwrap();
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
-    assert!(!std::fs::symlink_metadata(&out).unwrap().file_type().is_symlink());
+    assert!(!std::fs::symlink_metadata(&out)
+        .unwrap()
+        .file_type()
+        .is_symlink());
 }
 
 #[test]
@@ -30,7 +36,10 @@ fn a_link_at_the_destination_is_refused_and_its_target_untouched() {
     let e = write_atomic(&out, b"new").unwrap_err();
     assert!(e.to_string().contains("symbolic link"), "{e}");
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
-    assert!(std::fs::symlink_metadata(&out).unwrap().file_type().is_symlink());
+    assert!(std::fs::symlink_metadata(&out)
+        .unwrap()
+        .file_type()
+        .is_symlink());
     // A dangling link is refused too (the tool would otherwise create its target).
     let dangling = dir.path().join("dangling.csv");
     symlink(dir.path().join("nowhere"), &dangling).unwrap();
@@ -64,10 +73,16 @@ fn a_folder_or_fifo_at_the_destination_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let sub = dir.path().join("sub");
     std::fs::create_dir(&sub).unwrap();
-    assert!(write_atomic(&sub, b"x").unwrap_err().to_string().contains("a folder"));
+    assert!(write_atomic(&sub, b"x")
+        .unwrap_err()
+        .to_string()
+        .contains("a folder"));
     let fifo = dir.path().join("pipe");
     let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
     // SAFETY: a valid NUL-terminated path.
     assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-    assert!(write_atomic(&fifo, b"x").unwrap_err().to_string().contains("FIFO"));
+    assert!(write_atomic(&fifo, b"x")
+        .unwrap_err()
+        .to_string()
+        .contains("FIFO"));
 }

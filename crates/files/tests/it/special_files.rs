@@ -13,7 +13,11 @@ fn a_fifo_is_refused_at_once_instead_of_blocking() {
     let start = Instant::now();
     let e = read_regular_text(&fifo, TEXT_LIMIT).unwrap_err();
     assert!(start.elapsed() < Duration::from_secs(5));
-    assert!(e.to_string().contains("FIFO (named pipe), not a regular file"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("FIFO (named pipe), not a regular file"),
+        "{e}"
+    );
 }
 
 #[test]

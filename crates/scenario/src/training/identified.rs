@@ -14,9 +14,9 @@ use super::data::{data_source, load_data};
 use super::SimulateData;
 use crate::context::Ctx;
 use crate::error::ScenarioError;
+use crate::identify_recording::ConditionedSamples;
 use crate::progress::{RunOptions, Stage};
 use crate::spec::Scenario;
-use crate::identify_recording::ConditionedSamples;
 
 /// Version of what an identification cache key stands for (bump when it changes).
 const IDENTIFICATION_KEY_VERSION: u32 = 1;
@@ -77,7 +77,11 @@ pub(crate) fn identified_nominal(
         }
     }
     if options.cache_only {
-        return Err(super::not_cached(ctx, "observer.training.identify", "the identification"));
+        return Err(super::not_cached(
+            ctx,
+            "observer.training.identify",
+            "the identification",
+        ));
     }
     let key_err = |message: String| ctx.err("observer.training.identify", message, None);
     let train = load_data(ctx, &train_src, &arm_joints, options, simulate)?;

@@ -240,7 +240,11 @@ pub(crate) fn observer_network(
         }
     }
     if options.cache_only {
-        return Err(not_cached(ctx, "observer.training", "the observer's network"));
+        return Err(not_cached(
+            ctx,
+            "observer.training",
+            "the observer's network",
+        ));
     }
 
     let label = variant.unwrap_or("base");
