@@ -13,6 +13,12 @@
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
+mod columns;
+mod lanes;
+
+pub(crate) use columns::InertiaColumns;
+pub(crate) use lanes::{sin_cos_lanes, SIN_COS_LANES};
+
 /// The skew-symmetric matrix `[a]x` such that `[a]x b = a x b`.
 #[inline(always)]
 pub fn skew(a: &Vector3<f64>) -> Matrix3<f64> {
@@ -73,76 +79,6 @@ pub(crate) fn rotate_about_axis_sin_cos(
             t * z * z + c,
         )
     }
-}
-
-/// Lanes of [`sin_cos_lanes`].
-pub(crate) const SIN_COS_LANES: usize = 8;
-
-/// Largest |x| reduced in the vector path of [`sin_cos_lanes`]: `k * PIO2_HI` is exact
-/// while the quadrant k has at most 20 bits (PIO2_HI has 33).
-const SIN_COS_REDUCED: f64 = 1.0e6;
-
-/// `(sin x, cos x)` of eight values at once, branch-free: the quadrant `k = round(2 x / pi)`,
-/// `r = x - k pi/2` in three parts (Cody and Waite), and the minimax polynomials of
-/// fdlibm's kernels on [-pi/4, pi/4] (within an ulp of the libm values); |x| above
-/// [`SIN_COS_REDUCED`] or non-finite go to [`f64::sin_cos`].
-// The constants as published (their extra digits round to the same doubles).
-#[allow(clippy::excessive_precision)]
-#[inline(always)]
-pub(crate) fn sin_cos_lanes(
-    x: &[f64; SIN_COS_LANES],
-) -> ([f64; SIN_COS_LANES], [f64; SIN_COS_LANES]) {
-    const PIO2_HI: f64 = 1.570_796_326_734_125_614_17;
-    const PIO2_MID: f64 = 6.077_100_506_303_965_976_6e-11;
-    const PIO2_LO: f64 = 2.022_266_248_711_166_455_8e-21;
-    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5 * 2^52
-    const S: [f64; 6] = [
-        -1.666_666_666_666_663_243_48e-1,
-        8.333_333_333_322_489_461_24e-3,
-        -1.984_126_982_985_794_931_34e-4,
-        2.755_731_370_707_006_767_89e-6,
-        -2.505_076_025_340_686_341_95e-8,
-        1.589_690_995_211_550_102_21e-10,
-    ];
-    const C: [f64; 6] = [
-        4.166_666_666_666_660_190_37e-2,
-        -1.388_888_888_887_410_957_49e-3,
-        2.480_158_728_947_672_941_78e-5,
-        -2.755_731_435_139_066_330_35e-7,
-        2.087_572_321_298_174_827_90e-9,
-        -1.135_964_755_778_819_482_65e-11,
-    ];
-    // False for NaN too.
-    let reducible = |v: f64| v.abs() <= SIN_COS_REDUCED;
-    let mut sin = [0.0; SIN_COS_LANES];
-    let mut cos = [0.0; SIN_COS_LANES];
-    let mut far = false;
-    for l in 0..SIN_COS_LANES {
-        let v = x[l];
-        far |= !reducible(v);
-        let k = (v * std::f64::consts::FRAC_2_PI + ROUND) - ROUND;
-        let r = ((v - k * PIO2_HI) - k * PIO2_MID) - k * PIO2_LO;
-        let z = r * r;
-        let ps = S[1] + z * (S[2] + z * (S[3] + z * (S[4] + z * S[5])));
-        let sr = r + z * r * (S[0] + z * ps);
-        let pc = z * (C[0] + z * (C[1] + z * (C[2] + z * (C[3] + z * (C[4] + z * C[5])))));
-        let hz = 0.5 * z;
-        let w = 1.0 - hz;
-        let cr = w + (((1.0 - w) - hz) + z * pc);
-        // Quadrant k mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
-        let q = (k as i64 & 3) as u8;
-        let (a, b) = if q & 1 == 0 { (sr, cr) } else { (cr, sr) };
-        sin[l] = if q & 2 == 0 { a } else { -a };
-        cos[l] = if (q + 1) & 2 == 0 { b } else { -b };
-    }
-    if far {
-        for l in 0..SIN_COS_LANES {
-            if !reducible(x[l]) {
-                (sin[l], cos[l]) = x[l].sin_cos();
-            }
-        }
-    }
-    (sin, cos)
 }
 
 /// Rotation from URDF roll-pitch-yaw angles: `R = Rz(yaw) Ry(pitch) Rx(roll)`.
@@ -570,118 +506,6 @@ pub(crate) fn transform_articulated_inertia(x: &Transform, ia: &Matrix6<f64>) ->
     out
 }
 
-/// A spatial inertia in the layout of the CRBA's composite pass: the rotational inertia
-/// as three columns and the first moment, each padded to four values, so that a frame
-/// change is a few independent 4-wide multiply-adds (the same formula as
-/// [`Inertia::transformed`], ordered for short dependency chains).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct InertiaColumns {
-    mass: f64,
-    first_moment: [f64; 4],
-    columns: [[f64; 4]; 3],
-}
-
-/// `sum_k v[k] * c[k]` over three padded columns.
-#[inline(always)]
-fn combine(c: &[[f64; 4]; 3], v: [f64; 3]) -> [f64; 4] {
-    let mut out = [0.0; 4];
-    for (l, o) in out.iter_mut().enumerate() {
-        *o = c[0][l] * v[0] + c[1][l] * v[1] + c[2][l] * v[2];
-    }
-    out
-}
-
-impl InertiaColumns {
-    /// The column form of `inertia`.
-    #[inline(always)]
-    pub(crate) fn new(inertia: &Inertia) -> Self {
-        let i = &inertia.rotational;
-        let h = &inertia.first_moment;
-        Self {
-            mass: inertia.mass,
-            first_moment: [h.x, h.y, h.z, 0.0],
-            columns: [
-                [i[(0, 0)], i[(1, 0)], i[(2, 0)], 0.0],
-                [i[(0, 1)], i[(1, 1)], i[(2, 1)], 0.0],
-                [i[(0, 2)], i[(1, 2)], i[(2, 2)], 0.0],
-            ],
-        }
-    }
-
-    /// Sum of two inertias in the same frame.
-    #[inline(always)]
-    pub(crate) fn add(&self, o: &Self) -> Self {
-        let mut out = *self;
-        out.mass += o.mass;
-        for l in 0..4 {
-            out.first_moment[l] += o.first_moment[l];
-            for k in 0..3 {
-                out.columns[k][l] += o.columns[k][l];
-            }
-        }
-        out
-    }
-
-    /// Expressed in the parent frame of `x`: `h' = R h + m p`,
-    /// `I' = R I R^T - (p w^T + w p^T) + 2 (p . w) 1` with `w = R h + (m / 2) p`
-    /// (the parallel-axis terms of [`Inertia::transformed`] regrouped).
-    #[inline(always)]
-    pub(crate) fn transformed(&self, x: &Transform) -> Self {
-        let r = &x.rotation;
-        let rc = [
-            [r[(0, 0)], r[(1, 0)], r[(2, 0)], 0.0],
-            [r[(0, 1)], r[(1, 1)], r[(2, 1)], 0.0],
-            [r[(0, 2)], r[(1, 2)], r[(2, 2)], 0.0],
-        ];
-        let p = [x.translation.x, x.translation.y, x.translation.z, 0.0];
-        let m = self.mass;
-        let h = &self.first_moment;
-        let rh = combine(&rc, [h[0], h[1], h[2]]);
-        // R I, column by column, then (R I) R^T.
-        let c = &self.columns;
-        let ri = [
-            combine(&rc, [c[0][0], c[0][1], c[0][2]]),
-            combine(&rc, [c[1][0], c[1][1], c[1][2]]),
-            combine(&rc, [c[2][0], c[2][1], c[2][2]]),
-        ];
-        let mut w = [0.0; 4];
-        let mut first_moment = [0.0; 4];
-        for l in 0..4 {
-            w[l] = rh[l] + 0.5 * m * p[l];
-            first_moment[l] = rh[l] + m * p[l];
-        }
-        let pw2 = 2.0 * (p[0] * w[0] + p[1] * w[1] + p[2] * w[2]);
-        let mut columns = [[0.0; 4]; 3];
-        for (j, col) in columns.iter_mut().enumerate() {
-            *col = combine(&ri, [rc[0][j], rc[1][j], rc[2][j]]);
-            for l in 0..4 {
-                col[l] -= p[l] * w[j] + w[l] * p[j];
-            }
-            col[j] += pw2;
-        }
-        Self {
-            mass: m,
-            first_moment,
-            columns,
-        }
-    }
-
-    /// The momentum `I m` of a body moving with `m` ([`Inertia::mul_motion`]).
-    #[inline(always)]
-    pub(crate) fn mul_motion(&self, m: &Motion) -> Force {
-        let h = Vector3::new(
-            self.first_moment[0],
-            self.first_moment[1],
-            self.first_moment[2],
-        );
-        let iw = combine(&self.columns, [m.angular.x, m.angular.y, m.angular.z]);
-        Force {
-            linear: m.linear * self.mass + m.angular.cross(&h),
-            angular: Vector3::new(iw[0], iw[1], iw[2]) + h.cross(&m.linear),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -717,73 +541,6 @@ mod tests {
         assert!((back.to_vector() - m.to_vector()).norm() < 1e-12);
         let backf = x.act_inv_force(&x.act_force(&f));
         assert!((backf.to_vector() - f.to_vector()).norm() < 1e-12);
-    }
-
-    #[test]
-    fn column_form_transform_matches_inertia_transform() {
-        let x = sample_transform();
-        let a = Inertia::from_com(
-            2.5,
-            Vector3::new(0.1, -0.05, 0.2),
-            Matrix3::new(0.3, 0.01, -0.02, 0.01, 0.25, 0.03, -0.02, 0.03, 0.2),
-        );
-        let b = Inertia::from_com(
-            1.2,
-            Vector3::new(-0.3, 0.2, 0.1),
-            Matrix3::identity() * 0.05,
-        );
-        let m = Motion {
-            linear: Vector3::new(0.1, 0.2, -0.3),
-            angular: Vector3::new(1.0, -2.0, 0.5),
-        };
-        let want = b.add(&a.transformed(&x)).mul_motion(&m).to_vector();
-        let cols = InertiaColumns::new(&b).add(&InertiaColumns::new(&a).transformed(&x));
-        let got = cols.mul_motion(&m).to_vector();
-        assert!((got - want).norm() < 1e-13 * want.norm(), "{got} vs {want}");
-    }
-
-    #[test]
-    fn sin_cos_lanes_match_libm() {
-        let mut worst: f64 = 0.0;
-        let mut check = |x: [f64; SIN_COS_LANES]| {
-            let (s, c) = sin_cos_lanes(&x);
-            for l in 0..SIN_COS_LANES {
-                let (ws, wc) = x[l].sin_cos();
-                if !x[l].is_finite() {
-                    assert!(s[l].is_nan() && c[l].is_nan());
-                    continue;
-                }
-                worst = worst.max((s[l] - ws).abs()).max((c[l] - wc).abs());
-            }
-        };
-        let mut v = -40.0;
-        while v < 40.0 {
-            check(std::array::from_fn(|l| v + l as f64 * 1.37e-3));
-            v += 0.0123;
-        }
-        // Quadrant boundaries, tiny, large (vector path) and far (libm) values.
-        let pio2 = std::f64::consts::FRAC_PI_2;
-        check([
-            0.0,
-            -0.0,
-            1e-300,
-            pio2,
-            -pio2,
-            3.0 * pio2,
-            1e5 + 0.3,
-            -9.9e5,
-        ]);
-        check([
-            2e6,
-            -3e9,
-            1e300,
-            f64::NAN,
-            f64::INFINITY,
-            7.0,
-            100.0 * pio2,
-            1e-9,
-        ]);
-        assert!(worst < 4e-16, "largest difference to libm {worst:e}");
     }
 
     #[test]
