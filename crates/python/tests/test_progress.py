@@ -76,9 +76,10 @@ def test_the_python_bar_on_a_terminal(quiet, ci, drawn):
 
 @pytest.mark.parametrize("flag,ci,drawn", [(None, False, True), ("--quiet", False, False), (None, True, False)])
 def test_admittance_run_on_a_terminal(admittance_bin, tmp_path, flag, ci, drawn):
-    """A run of a few seconds (the PD variant of experiment A, 120 simulated s): its stage
-    and bar on a terminal; none with --quiet or in CI."""
-    cmd = [str(admittance_bin), "run", "scenarios/deadzone.toml", "--variant", "pd", "--set", "duration=120",
+    """A run of several seconds (the PD variant of experiment A, 600 simulated s: about 5 s,
+    well past the 1 s after which the bar appears): its stage and bar on a terminal; none
+    with --quiet or in CI."""
+    cmd = [str(admittance_bin), "run", "scenarios/deadzone.toml", "--variant", "pd", "--set", "duration=600",
            "--no-recording", "--out", str(tmp_path / "run")] + ([flag] if flag else [])
     code, out = on_terminal(cmd, env_without_ci(**({"CI": "true"} if ci else {})))
     assert code == 0, out
