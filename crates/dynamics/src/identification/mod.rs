@@ -18,6 +18,7 @@ mod base;
 mod consistency;
 mod constrained;
 mod excitation;
+mod excitation_settings;
 mod file;
 mod fit;
 mod joint_terms;
