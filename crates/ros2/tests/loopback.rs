@@ -8,7 +8,6 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -16,10 +15,6 @@ use admittance_bag::Profile;
 use admittance_ros2::node::{fake_sample, FakeArmReport};
 use admittance_ros2::stats::BridgeStats;
 use admittance_ros2::{offline, BridgeConfig, WrenchFrame};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn wait(child: &mut Child, limit: Duration, what: &str) -> std::process::ExitStatus {
     let start = Instant::now();
