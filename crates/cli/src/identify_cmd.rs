@@ -261,20 +261,31 @@ fn filter_name(hz: f64) -> String {
     }
 }
 
+/// The torque's delay behind the motion: one value when every joint has the same (as
+/// `identify` chooses), else per joint.
+fn delay_text(delay_s: &[f64]) -> String {
+    let ms: Vec<f64> = delay_s.iter().map(|d| (1e4 * d).round() / 10.0).collect();
+    match ms.first() {
+        None => "0 ms".into(),
+        Some(first) if ms.iter().all(|d| d == first) => format!("{first} ms"),
+        Some(_) => format!("per joint {ms:?} ms"),
+    }
+}
+
 /// The console table: per joint the URDF's and the identification's rms on held-out motion.
 fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> String {
     let s = &ident.summary;
     let mut text = format!(
         "identified {} joints from {} samples in {seconds:.1} s; held out: {}\n\
-         ridge {:.1e}, {} base parameters, condition number {:.1}, bodies projected to physical: {:?}\n\
+         ridge {:.1e}, {} base parameters, condition number {:.1}, bodies a free fit would make impossible: {:?}\n\
          expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}\n",
         arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
         s.projected_bodies, "joint", "URDF", "identified", "springs"
     );
     text = format!(
-        "signals: input filter {}, torque delay per joint {:?} ms, acceleration gain {}, estimate's 90 % step response {:.0} ms\n{text}",
+        "signals: input filter {}, torque delay {}, acceleration gain {}, estimate's 90 % step response {:.0} ms\n{text}",
         filter_name(s.input_filter_hz),
-        s.delay_s.iter().map(|d| (1e4 * d).round() / 10.0).collect::<Vec<_>>(),
+        delay_text(&s.delay_s),
         s.acceleration_gain,
         1e3 * s.step_response_s
     );

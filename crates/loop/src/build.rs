@@ -102,7 +102,7 @@ fn estimate_source<Training>(
     trained: Option<BroadModel>,
 ) -> Result<EstimateSource, LoopError> {
     let spec = &config.observer;
-    let observer = match observer(model, config, trained)? {
+    let (observer, torque_delay_s) = match observer(model, config, trained)? {
         None if spec.kind == ObserverKind::Oracle => return Ok(EstimateSource::Oracle),
         None => return Ok(EstimateSource::None),
         Some(observer) => observer,
@@ -118,17 +118,19 @@ fn estimate_source<Training>(
         delayed_torque: spec.kind == ObserverKind::Learned,
         rate_hz: config.control_rate_hz,
     };
-    Ok(EstimateSource::Observer(Box::new(ObserverStage::new(
-        observer, &settings,
-    )?)))
+    let stage = ObserverStage::new(observer, &settings)?
+        .with_torque_delay(&torque_delay_s, config.control_rate_hz)?;
+    Ok(EstimateSource::Observer(Box::new(stage)))
 }
 
-/// The external-torque observer (docs/method.md section 5); `None` for `none` and `oracle`.
+/// The external-torque observer (docs/method.md section 5) and, when it runs on an
+/// identification, the torque delays that identification was fitted with; `None` for
+/// `none` and `oracle`.
 fn observer<Training>(
     model: &Model,
     config: &LoopConfig<Training>,
     trained: Option<BroadModel>,
-) -> Result<Option<Box<dyn Observer + Send>>, LoopError> {
+) -> Result<Option<(Box<dyn Observer + Send>, Vec<f64>)>, LoopError> {
     let spec = &config.observer;
     let momentum_err =
         |e: ConfigError| LoopError::invalid(format!("observer.momentum.{}", e.key), e.message);
@@ -136,13 +138,16 @@ fn observer<Training>(
         if let Some(path) = &spec.identification {
             let ident = admittance_dynamics::Identification::load(path, model)
                 .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?;
-            return MomentumObserver::from_identification(&ident, &spec.momentum)
-                .map_err(momentum_err);
+            let observer = MomentumObserver::from_identification(&ident, &spec.momentum)
+                .map_err(momentum_err)?;
+            return Ok((observer, ident.summary.delay_s.clone()));
         }
         let nominal = model
             .with_scaled_inertias(spec.nominal_inertia_scale)
             .map_err(|e| LoopError::invalid("observer.nominal_inertia_scale", e.to_string()))?;
-        MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)
+        let observer =
+            MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)?;
+        Ok((observer, Vec::new()))
     };
     let network = || {
         match (trained, &spec.network) {
@@ -158,16 +163,22 @@ fn observer<Training>(
     let network_err = |e: ConfigError| LoopError::invalid("observer.training", e.to_string());
     Ok(match spec.kind {
         ObserverKind::None | ObserverKind::Oracle => None,
-        ObserverKind::Momentum => Some(Box::new(momentum()?)),
+        ObserverKind::Momentum => {
+            let (observer, delay) = momentum()?;
+            Some((Box::new(observer) as Box<dyn Observer + Send>, delay))
+        }
         ObserverKind::Hybrid => {
             let network = network()?;
-            Some(Box::new(
-                HybridObserver::new(momentum()?, network).map_err(network_err)?,
+            let (observer, delay) = momentum()?;
+            Some((
+                Box::new(HybridObserver::new(observer, network).map_err(network_err)?) as _,
+                delay,
             ))
         }
         // The loop low-passes every estimate (observer.cutoff_hz): none inside.
-        ObserverKind::Learned => Some(Box::new(
-            LearnedObserver::new(network()?, 0.0).map_err(network_err)?,
+        ObserverKind::Learned => Some((
+            Box::new(LearnedObserver::new(network()?, 0.0).map_err(network_err)?) as _,
+            Vec::new(),
         )),
     })
 }

@@ -5,6 +5,7 @@
 use admittance_control::{Observer, ObserverInput};
 
 use crate::conditioning::InputConditioner;
+use crate::delay::InputDelay;
 use crate::error::LoopError;
 use crate::estimate_filter::EstimateLowPass;
 use crate::signal::Measurement;
@@ -15,6 +16,8 @@ use crate::signal::Measurement;
 pub struct ObserverStage {
     observer: Box<dyn Observer + Send>,
     conditioner: Option<InputConditioner>,
+    /// The identification's torque delay behind the motion, applied after the conditioning.
+    delay: Option<InputDelay>,
     delayed_torque: bool,
     previous_filtered_torque: Vec<f64>,
     raw: Vec<f64>,
@@ -60,12 +63,32 @@ impl ObserverStage {
         Ok(Self {
             observer,
             conditioner,
+            delay: None,
             delayed_torque: settings.delayed_torque,
             previous_filtered_torque: vec![0.0; n],
             raw: vec![0.0; n],
             alpha,
             warmup: settings.warmup,
         })
+    }
+
+    /// Feeds the observer each joint's torque with the motion `delay_s[i]` older (negative:
+    /// the torque older), as an identification with those delays was fitted
+    /// (`IdentificationSummary::delay_s`); an error (at `observer.identification`) for a
+    /// delay that is not a number of at most 1 s.
+    pub fn with_torque_delay(mut self, delay_s: &[f64], rate_hz: f64) -> Result<Self, LoopError> {
+        if delay_s.len() != self.raw.len() && !delay_s.is_empty() {
+            return Err(LoopError::invalid(
+                "observer.identification",
+                format!(
+                    "holds {} torque delays for {} joints (identify the arm again)",
+                    delay_s.len(),
+                    self.raw.len()
+                ),
+            ));
+        }
+        self.delay = InputDelay::new(delay_s, rate_hz)?;
+        Ok(self)
     }
 
     /// Updates `estimate` from the measurement at `time`; false when the observer
@@ -100,6 +123,20 @@ impl ObserverStage {
                 qddot: &m.qddot,
                 tau_commanded: tau_in,
             },
+        };
+        let input = match self.delay.as_mut() {
+            Some(delay) => {
+                let n = input.q.len();
+                let d = delay.update(input.q, input.qdot, input.qddot, input.tau_commanded);
+                ObserverInput {
+                    time,
+                    q: &d[..n],
+                    qdot: &d[n..2 * n],
+                    qddot: &d[2 * n..3 * n],
+                    tau_commanded: &d[3 * n..],
+                }
+            }
+            None => input,
         };
         let ok = self.observer.update(&input, dt, &mut self.raw).is_ok();
         if time < self.warmup {

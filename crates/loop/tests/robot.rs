@@ -235,3 +235,56 @@ fn a_deployment_folder_is_verified_file_by_file() {
     let e = Deployment::load(tmp.path()).err().unwrap().to_string();
     assert!(e.contains("manifest.json"), "{e}");
 }
+
+#[test]
+fn the_identifications_torque_delay_is_applied_at_run_time() {
+    // Torques that arrive 20 ms after the motion they belong to, as a torque filter would
+    // make them. An identification records that delay; the loop pairs them back.
+    let tmp = tempfile::tempdir().unwrap();
+    let model = model();
+    let mut ident = admittance_dynamics::Identification::from_model(model.clone());
+    let save = |ident: &admittance_dynamics::Identification, name: &str| {
+        let path = tmp.path().join(name);
+        ident.save(&path, &model, Default::default()).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let plain = save(&ident, "plain.json");
+    ident.summary.delay_s = vec![0.02; 7];
+    let delayed = save(&ident, "delayed.json");
+    let false_torque = |file: &str| {
+        let config = RobotConfig::from_toml_with(
+            LOOP_TOML,
+            Path::new("loop.toml"),
+            &[&format!("observer.identification = \"{file}\"")],
+        )
+        .unwrap();
+        let mut l = RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap();
+        let mut data = Data::new(&model);
+        let mut sum = 0.0;
+        for k in 0..4000 {
+            let (q, _) = motion(&model, &mut data, k);
+            let (_, tau) = motion(&model, &mut data, k.saturating_sub(20));
+            let s = l.step(&RobotInput {
+                time: k as f64 * 1e-3,
+                q: &q,
+                qdot: None,
+                tau: Some(&tau),
+                desired: None,
+            });
+            assert!(s.is_ok() || k < 10, "step {k}");
+            if k >= 2000 {
+                sum += l
+                    .external_torque_estimate()
+                    .iter()
+                    .map(|e| e * e)
+                    .sum::<f64>();
+            }
+        }
+        (sum / 2000.0).sqrt()
+    };
+    let (without, with) = (false_torque(&plain), false_torque(&delayed));
+    assert!(
+        with < 0.5 * without,
+        "false torque {with} with the delay, {without} without"
+    );
+}

@@ -8,7 +8,8 @@
 //!
 //! is positive definite (Wensing et al. 2017): positive mass, positive definite rotational
 //! inertia about the centre of mass, and the triangle inequalities of its principal moments.
-//! Least squares knows none of this, so the fitted bodies are projected onto that set.
+//! The set of such matrices is a convex cone, so a least squares over possible bodies has
+//! one minimum (`constrained.rs`).
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -28,6 +29,11 @@ fn pseudo_inertia(b: &Inertia) -> Matrix4<f64> {
         .copy_from(&b.first_moment.transpose());
     j[(3, 3)] = b.mass;
     j
+}
+
+/// The pseudo-inertia of ten inertial parameters (a linear map).
+pub(crate) fn pseudo_inertia_of(p: &[f64; PARAMETERS_PER_BODY]) -> Matrix4<f64> {
+    pseudo_inertia(&Inertia::from_parameters(p))
 }
 
 fn from_pseudo_inertia(j: &Matrix4<f64>) -> Inertia {
@@ -69,35 +75,6 @@ pub(crate) fn project(
     Some(from_pseudo_inertia(&(0.5 * (j + j.transpose()))).to_parameters())
 }
 
-/// Log-Cholesky coordinates of a physically possible body (Rucker and Wensing 2022): the
-/// pseudo-inertia is `J = U U^T` with `U` upper triangular, and `theta = [ln U_00, ln U_11,
-/// ln U_22, ln U_33, U_01, U_02, U_03, U_12, U_13, U_23]`. Every `theta` maps to a
-/// physically possible body, so a fit over `theta` cannot leave the set.
-pub(crate) fn to_log_cholesky(
-    p: &[f64; PARAMETERS_PER_BODY],
-    margin: f64,
-) -> Option<[f64; PARAMETERS_PER_BODY]> {
-    let j = pseudo_inertia(&Inertia::from_parameters(&project(p, 2.0 * margin)?))
-        - Matrix4::identity() * margin;
-    // J = U U^T with U upper triangular is the ordinary Cholesky factor of the
-    // index-reversed matrix, reversed back.
-    let rev = |m: &Matrix4<f64>| Matrix4::from_fn(|r, c| m[(3 - r, 3 - c)]);
-    let l = rev(&j).cholesky()?.l();
-    let u = rev(&l);
-    Some([
-        u[(0, 0)].ln(),
-        u[(1, 1)].ln(),
-        u[(2, 2)].ln(),
-        u[(3, 3)].ln(),
-        u[(0, 1)],
-        u[(0, 2)],
-        u[(0, 3)],
-        u[(1, 2)],
-        u[(1, 3)],
-        u[(2, 3)],
-    ])
-}
-
 /// The margin of a body: its pseudo-inertia is kept at least this far from singular
 /// (1e-6 of the prior body's largest eigenvalue), so a fit the data barely constrain cannot
 /// end on a flat or massless body.
@@ -106,31 +83,4 @@ pub(crate) fn margin(prior: &[f64; PARAMETERS_PER_BODY]) -> f64 {
         .symmetric_eigenvalues()
         .max()
         .max(0.0)
-}
-
-/// The inertial parameters of log-Cholesky coordinates (see [`to_log_cholesky`]), the
-/// pseudo-inertia being `U U^T + margin * 1`.
-pub(crate) fn from_log_cholesky(
-    t: &[f64; PARAMETERS_PER_BODY],
-    margin: f64,
-) -> [f64; PARAMETERS_PER_BODY] {
-    let u = Matrix4::new(
-        t[0].exp(),
-        t[4],
-        t[5],
-        t[6],
-        0.0,
-        t[1].exp(),
-        t[7],
-        t[8],
-        0.0,
-        0.0,
-        t[2].exp(),
-        t[9],
-        0.0,
-        0.0,
-        0.0,
-        t[3].exp(),
-    );
-    from_pseudo_inertia(&(u * u.transpose() + Matrix4::identity() * margin)).to_parameters()
 }

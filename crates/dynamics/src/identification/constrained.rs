@@ -1,245 +1,206 @@
-//! The identification least squares over physically possible arms only (issue 30): each
-//! body in log-Cholesky coordinates (`consistency.rs`), and each joint's rotor inertia,
-//! viscous friction and friction curve kept dissipative by bounds (`JointTerms::is_physical`:
-//! `I_a >= 0`, `F_v >= 0`, a friction curve that opposes the velocity at every speed),
-//! minimised together by a
-//! projected Levenberg-Marquardt on the normal equations (the cost is quadratic in the
-//! parameters, so each step needs only the Gram matrix, never the samples). The two Coulomb
-//! levels live in the coordinates `t = 10 F_c1 + F_c2` and `u = F_c1 + F_c2`, both `>= 0`:
-//! exactly the curves that oppose the velocity at every speed. The bounds are
-//! part of the fit, not a clipping afterwards: a bound that binds hands its share of the
-//! torque to the other terms.
+//! The identification least squares over physically possible arms only (issue 30).
+//!
+//! The set is convex: a body is possible exactly when its pseudo-inertia `J` is positive
+//! definite (`consistency.rs`; kept `margin` from singular), and each joint's rotor inertia,
+//! viscous friction and friction curve are dissipative by linear bounds
+//! (`JointTerms::is_physical`: `I_a >= 0`, `F_v >= 0`, and `10 F_c1 + F_c2 >= 0`,
+//! `F_c1 + F_c2 >= 0`: exactly the friction curves that oppose the velocity at every speed).
+//! The cost is quadratic, so the fit is a semidefinite least squares with one global
+//! minimum, found by a barrier method (Boyd and Vandenberghe 2004, ch. 11): Newton's method
+//! on `t f(x) - sum log det(J_b - margin) - sum log(bound)` for a growing `t`, from a
+//! strictly possible start, until the duality gap `nu / t` is below a part in 1e7 of the
+//! unconstrained fit's residual (and at most 1e-13 of the torques' sum of squares). Every iterate is strictly inside the set, so the result is
+//! physical with nothing clipped afterwards: a bound that binds hands its share of the torque
+//! to the other terms.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix4};
 
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
-use crate::identification::consistency::{from_log_cholesky, margin, to_log_cholesky};
+use crate::identification::consistency::{margin, project, pseudo_inertia_of};
 use crate::identification::joint_terms::JOINT_FEATURES;
 use crate::identification::normal::{reduced_system, Normal};
 
-const MAX_ITERATIONS: usize = 300;
-/// Finite-difference step of the log-Cholesky Jacobian.
-const STEP: f64 = 1e-6;
+/// Growth of `t` between centrings.
+const T_GROWTH: f64 = 10.0;
+/// Duality gap at which the method stops, relative to the unconstrained fit's sum of
+/// squared residuals (a lower bound of the constrained one's), and at least this share of
+/// the torques' sum of squares (noise-free data leave no residual to be relative to).
+const GAP: f64 = 1e-7;
+const GAP_FLOOR: f64 = 1e-13;
+/// Newton steps in all (a cap: typically 40 to 80 are taken).
+const MAX_NEWTON_STEPS: usize = 400;
+/// Halvings of a step before the line search gives up.
+const MAX_HALVINGS: usize = 60;
 
-/// The reduced quadratic `f(x) = x^T A x - 2 c^T x` on the active columns, ridge included.
-struct Quadratic {
-    a: DMatrix<f64>,
-    c: DVector<f64>,
-    yy: f64,
+/// A body kept possible: its ten columns and the pseudo-inertia of each unit parameter.
+struct Body {
+    cols: [usize; PARAMETERS_PER_BODY],
+    basis: [Matrix4<f64>; PARAMETERS_PER_BODY],
+    margin: f64,
 }
 
-impl Quadratic {
-    fn cost(&self, x: &DVector<f64>) -> f64 {
-        self.yy + x.dot(&(&self.a * x)) - 2.0 * self.c.dot(x)
+impl Body {
+    fn new(cols: [usize; PARAMETERS_PER_BODY], margin: f64) -> Self {
+        Body {
+            cols,
+            basis: std::array::from_fn(|k| {
+                let mut e = [0.0; PARAMETERS_PER_BODY];
+                e[k] = 1.0;
+                pseudo_inertia_of(&e)
+            }),
+            margin,
+        }
+    }
+
+    /// `J(x) - margin 1`.
+    fn slack(&self, x: &DVector<f64>) -> Matrix4<f64> {
+        let mut s = Matrix4::identity() * -self.margin;
+        for (m, &c) in self.basis.iter().zip(&self.cols) {
+            s += m * x[c];
+        }
+        s
     }
 }
 
-/// How one body's ten parameters are free.
-#[derive(Clone, Copy)]
-enum Body {
-    /// Held at the prior (a massless prior body cannot be placed in log-Cholesky).
-    Fixed,
-    /// Physically possible by construction: log-Cholesky coordinates from `start` in `z`,
-    /// with the body's margin.
-    Consistent { start: usize, margin: f64 },
-    /// The parameters themselves from `start` (the user turned consistency off).
-    Linear { start: usize },
-}
-
-/// The free coordinates `z` of the reduced solution `x`: the bodies (see [`Body`]), then
-/// the active joint columns. Joint coordinates are `x` itself except the two Coulomb
-/// levels, whose coordinates are `t = 10 F_c1 + F_c2` (at the first) and `u = F_c1 + F_c2`
-/// (at the second), so that every joint bound is `z >= 0`.
-struct Coordinates {
+/// The physically possible set of the reduced problem's columns.
+struct Set {
     bodies: Vec<Body>,
-    /// Per joint coordinate (from `first_joint_z`): for the second Coulomb level's (`u`),
-    /// the coordinate of the first's (`t`).
-    pair: Vec<Option<usize>>,
-    /// Per coordinate of `z`: bounded below by zero.
-    bounded: Vec<bool>,
-    first_joint_x: usize,
-    first_joint_z: usize,
-    len: usize,
+    /// Linear bounds `sum coef * x[col] > 0`.
+    bounds: Vec<Vec<(usize, f64)>>,
 }
 
-impl Coordinates {
-    /// For the active columns `idx` (full column indices) of an arm of `bodies` bodies.
-    fn new(idx: &[usize], bodies: usize, physical: bool, prior: &[f64]) -> (Self, usize) {
+impl Set {
+    /// For the active columns `idx` of an arm of `bodies` bodies: the bodies (those the
+    /// prior gives mass) when `physical`, joint terms always.
+    fn new(idx: &[usize], bodies: usize, physical: bool, prior: &[f64]) -> Self {
         let inertial = bodies * PARAMETERS_PER_BODY;
-        let mut slots = Vec::with_capacity(bodies);
-        let mut z_len = 0;
-        for b in 0..bodies {
+        let position = |col: usize| idx.iter().position(|&c| c == col);
+        let mut set = Set {
+            bodies: Vec::new(),
+            bounds: Vec::new(),
+        };
+        for b in (0..bodies).filter(|_| physical) {
+            let cols: Option<Vec<usize>> = (0..PARAMETERS_PER_BODY)
+                .map(|k| position(b * PARAMETERS_PER_BODY + k))
+                .collect();
+            let Some(cols) = cols else { continue };
             let mut p = [0.0; PARAMETERS_PER_BODY];
             p.copy_from_slice(&prior[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY]);
-            let slot = if !physical {
-                Body::Linear { start: z_len }
-            } else {
-                let eps = margin(&p);
-                match to_log_cholesky(&p, eps) {
-                    Some(_) => Body::Consistent {
-                        start: z_len,
-                        margin: eps,
-                    },
-                    None => Body::Fixed,
+            set.bodies
+                .push(Body::new(std::array::from_fn(|k| cols[k]), margin(&p)));
+        }
+        for (r, &col) in idx.iter().enumerate().filter(|(_, &c)| c >= inertial) {
+            let feature = (col - inertial) % JOINT_FEATURES;
+            match (feature, position(col + 1), position(col.wrapping_sub(1))) {
+                (0 | 1, _, _) => set.bounds.push(vec![(r, 1.0)]),
+                // The two Coulomb levels: 10 F_c1 + F_c2 and F_c1 + F_c2.
+                (2, Some(second), _) => {
+                    set.bounds.push(vec![(r, 10.0), (second, 1.0)]);
+                    set.bounds.push(vec![(r, 1.0), (second, 1.0)]);
                 }
+                (2, None, _) | (3, _, None) => set.bounds.push(vec![(r, 1.0)]),
+                _ => {}
+            }
+        }
+        set
+    }
+
+    /// The barrier parameter: the sum of the cones' orders.
+    fn order(&self) -> f64 {
+        (4 * self.bodies.len() + self.bounds.len()) as f64
+    }
+
+    fn bound(row: &[(usize, f64)], x: &DVector<f64>) -> f64 {
+        row.iter().map(|&(c, v)| v * x[c]).sum()
+    }
+
+    /// `-sum log det(slack) - sum log(bound)`; `None` outside the set's interior.
+    fn barrier(&self, x: &DVector<f64>) -> Option<f64> {
+        let mut sum = 0.0;
+        for b in &self.bodies {
+            let l = b.slack(x).cholesky()?.l();
+            sum -= 2.0 * (0..4).map(|i| l[(i, i)].ln()).sum::<f64>();
+        }
+        for row in &self.bounds {
+            let v = Self::bound(row, x);
+            if !(v > 0.0) {
+                return None;
+            }
+            sum -= v.ln();
+        }
+        sum.is_finite().then_some(sum)
+    }
+
+    /// Adds the barrier's gradient and Hessian at `x` (inside the set).
+    fn add_derivatives(
+        &self,
+        x: &DVector<f64>,
+        grad: &mut DVector<f64>,
+        hess: &mut DMatrix<f64>,
+    ) -> Option<()> {
+        for b in &self.bodies {
+            let inv = b.slack(x).cholesky()?.inverse();
+            let p: [Matrix4<f64>; PARAMETERS_PER_BODY] = std::array::from_fn(|k| inv * b.basis[k]);
+            for k in 0..PARAMETERS_PER_BODY {
+                grad[b.cols[k]] -= p[k].trace();
+                for l in 0..=k {
+                    let h = p[k].component_mul(&p[l].transpose()).sum();
+                    hess[(b.cols[k], b.cols[l])] += h;
+                    if l != k {
+                        hess[(b.cols[l], b.cols[k])] += h;
+                    }
+                }
+            }
+        }
+        for row in &self.bounds {
+            let v = Self::bound(row, x);
+            for &(c, a) in row {
+                grad[c] -= a / v;
+                for &(d, e) in row {
+                    hess[(c, d)] += a * e / (v * v);
+                }
+            }
+        }
+        Some(())
+    }
+
+    /// A point strictly inside the set near `x`: each body's pseudo-inertia with its
+    /// eigenvalues raised to twice the margin (or the prior's, when `x` gives the body no
+    /// mass at all), each bound's columns raised to `floor` where the bound is not positive.
+    fn interior_near(&self, x: &DVector<f64>, prior: &[f64], floor: &[f64]) -> DVector<f64> {
+        let mut z = x.clone();
+        for b in &self.bodies {
+            let take = |v: &dyn Fn(usize) -> f64| -> [f64; PARAMETERS_PER_BODY] {
+                std::array::from_fn(|k| v(b.cols[k]))
             };
-            if !matches!(slot, Body::Fixed) {
-                z_len += PARAMETERS_PER_BODY;
-            }
-            slots.push(slot);
-        }
-        let joint_cols: Vec<usize> = idx.iter().copied().filter(|&c| c >= inertial).collect();
-        let first_joint_z = z_len;
-        let mut pair = Vec::with_capacity(joint_cols.len());
-        let mut bounded = vec![false; first_joint_z];
-        for &c in &joint_cols {
-            let feature = (c - inertial) % JOINT_FEATURES;
-            // Rotor inertia, viscous and both Coulomb coordinates are bounded below by zero.
-            bounded.push(feature < 4);
-            pair.push(if feature == 3 {
-                joint_cols
-                    .iter()
-                    .position(|&o| o == c - 1)
-                    .map(|p| first_joint_z + p)
-            } else {
-                None
-            });
-        }
-        let coords = Coordinates {
-            bodies: slots,
-            pair,
-            bounded,
-            first_joint_x: idx.len() - joint_cols.len(),
-            first_joint_z,
-            len: idx.len(),
-        };
-        (coords, first_joint_z + joint_cols.len())
-    }
-
-    /// The coordinates of the reduced solution `x`, projected onto the bounds; `None` when
-    /// a body cannot be expressed (not physically possible).
-    fn from_x(&self, x: &DVector<f64>, z_len: usize) -> Option<DVector<f64>> {
-        let mut z = DVector::zeros(z_len);
-        for (b, slot) in self.bodies.iter().enumerate() {
-            let mut p = [0.0; PARAMETERS_PER_BODY];
-            p.copy_from_slice(
-                &x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
-            );
-            match *slot {
-                Body::Fixed => {}
-                Body::Consistent { start, margin } => {
-                    let t = to_log_cholesky(&p, margin)?;
-                    z.rows_mut(start, PARAMETERS_PER_BODY).copy_from_slice(&t);
-                }
-                Body::Linear { start } => {
-                    z.rows_mut(start, PARAMETERS_PER_BODY).copy_from_slice(&p);
-                }
+            let p = project(&take(&|c| x[c]), 2.0 * b.margin)
+                .or_else(|| project(&take(&|c| prior[c]), 2.0 * b.margin));
+            if let Some(p) = p {
+                b.cols.iter().zip(p).for_each(|(&c, v)| z[c] = v);
             }
         }
-        for j in 0..self.pair.len() {
-            z[self.first_joint_z + j] = x[self.first_joint_x + j];
-        }
-        for j in 0..self.pair.len() {
-            if let Some(p) = self.pair[j] {
-                let (c1, c2) = (x[self.x_of(p)], x[self.first_joint_x + j]);
-                z[p] = 10.0 * c1 + c2;
-                z[self.first_joint_z + j] = c1 + c2;
-            }
-        }
-        self.project(&mut z);
-        Some(z)
-    }
-
-    fn project(&self, z: &mut DVector<f64>) {
-        for (v, &b) in z.iter_mut().zip(&self.bounded) {
-            if b && *v < 0.0 {
-                *v = 0.0;
-            }
-        }
-    }
-
-    fn to_x(&self, z: &DVector<f64>, fixed: &DVector<f64>) -> DVector<f64> {
-        let mut x = fixed.clone();
-        for (b, slot) in self.bodies.iter().enumerate() {
-            let rows = b * PARAMETERS_PER_BODY;
-            match *slot {
-                Body::Fixed => {}
-                Body::Consistent { start, margin } => {
-                    let mut t = [0.0; PARAMETERS_PER_BODY];
-                    t.copy_from_slice(&z.as_slice()[start..start + PARAMETERS_PER_BODY]);
-                    x.rows_mut(rows, PARAMETERS_PER_BODY)
-                        .copy_from_slice(&from_log_cholesky(&t, margin));
-                }
-                Body::Linear { start } => {
-                    x.rows_mut(rows, PARAMETERS_PER_BODY)
-                        .copy_from(&z.rows(start, PARAMETERS_PER_BODY));
-                }
-            }
-        }
-        for j in 0..self.pair.len() {
-            x[self.first_joint_x + j] = z[self.first_joint_z + j];
-        }
-        for (j, pair) in self.pair.iter().enumerate() {
-            if let Some(p) = *pair {
-                let (t, u) = (z[p], z[self.first_joint_z + j]);
-                x[self.x_of(p)] = (t - u) / 9.0;
-                x[self.first_joint_x + j] = (10.0 * u - t) / 9.0;
-            }
-        }
-        x
-    }
-
-    /// The row of `x` of joint coordinate `z` index `zi`.
-    fn x_of(&self, zi: usize) -> usize {
-        self.first_joint_x + (zi - self.first_joint_z)
-    }
-
-    /// `dx/dz` (the consistent bodies' 10 x 10 blocks by central differences).
-    fn jacobian(&self, z: &DVector<f64>) -> DMatrix<f64> {
-        let mut jac = DMatrix::zeros(self.len, z.len());
-        for (b, slot) in self.bodies.iter().enumerate() {
-            let rows = b * PARAMETERS_PER_BODY;
-            match *slot {
-                Body::Fixed => {}
-                Body::Linear { start } => {
-                    for k in 0..PARAMETERS_PER_BODY {
-                        jac[(rows + k, start + k)] = 1.0;
+        for row in &self.bounds {
+            if Self::bound(row, &z) <= 0.0 {
+                // A single column, or the Coulomb pair (t, u both set to their floor).
+                match row.as_slice() {
+                    [(c, _)] => z[*c] = floor[*c],
+                    [(first, _), (second, _)] => {
+                        let f = floor[*first];
+                        // 10 F_c1 + F_c2 = F_c1 + F_c2 = f: F_c1 = 0, F_c2 = f.
+                        z[*first] = z[*first].max(0.0).min(f);
+                        z[*second] = f;
                     }
-                }
-                Body::Consistent { start, margin } => {
-                    for k in 0..PARAMETERS_PER_BODY {
-                        let mut t = [0.0; PARAMETERS_PER_BODY];
-                        t.copy_from_slice(&z.as_slice()[start..start + PARAMETERS_PER_BODY]);
-                        t[k] += STEP;
-                        let plus = from_log_cholesky(&t, margin);
-                        t[k] -= 2.0 * STEP;
-                        let minus = from_log_cholesky(&t, margin);
-                        for r in 0..PARAMETERS_PER_BODY {
-                            jac[(rows + r, start + k)] = (plus[r] - minus[r]) / (2.0 * STEP);
-                        }
-                    }
+                    _ => {}
                 }
             }
         }
-        for j in 0..self.pair.len() {
-            jac[(self.first_joint_x + j, self.first_joint_z + j)] = 1.0;
-        }
-        for (j, pair) in self.pair.iter().enumerate() {
-            if let Some(p) = *pair {
-                let (xt, xu, zu) = (self.x_of(p), self.first_joint_x + j, self.first_joint_z + j);
-                jac[(xt, p)] = 1.0 / 9.0;
-                jac[(xt, zu)] = -1.0 / 9.0;
-                jac[(xu, p)] = -1.0 / 9.0;
-                jac[(xu, zu)] = 10.0 / 9.0;
-            }
-        }
-        jac
+        z
     }
 }
 
-/// The minimiser over physically possible arms (bodies possible when `physical`, joint
-/// terms always), started from the prior and from the unconstrained solution projected
-/// onto the possible set. Returns the full solution vector (inactive columns at the prior).
+/// The minimiser of the ridge least squares over physically possible arms (bodies possible
+/// when `physical`, joint terms always). Returns the full solution vector (inactive columns,
+/// and bodies the URDF gives no mass, at the prior).
 pub(crate) fn solve_physical(
     normal: &Normal,
     active: &[bool],
@@ -248,81 +209,216 @@ pub(crate) fn solve_physical(
     bodies: usize,
     physical: bool,
 ) -> Option<DVector<f64>> {
-    let (a, c, idx) = reduced_system(normal, active, prior, ridge);
-    let quad = Quadratic {
-        a,
-        c,
-        yy: normal.yy,
-    };
-    let from_prior: DVector<f64> = DVector::from_fn(idx.len(), |r, _| prior[idx[r]]);
-    let (coords, z_len) = Coordinates::new(&idx, bodies, physical, from_prior.as_slice());
-    let free = crate::identification::normal::solve(normal, active, prior, ridge)
-        .map(|x| DVector::from_fn(idx.len(), |r, _| x[idx[r]]));
-    let mut best: Option<(f64, DVector<f64>)> = None;
-    for start in [Some(from_prior.clone()), free].into_iter().flatten() {
-        // A start's impossible bodies are projected onto the possible set.
-        let Some(z) = coords.from_x(&start, z_len) else {
-            continue;
-        };
-        let cost = quad.cost(&coords.to_x(&z, &from_prior));
-        if cost.is_finite() && best.as_ref().is_none_or(|b| cost < b.0) {
-            best = Some((cost, z));
+    // A massless prior body has no cone to be kept in: it stays at the prior.
+    let mut active = active.to_vec();
+    if physical {
+        for b in 0..bodies {
+            let rows = b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY;
+            if !(prior[rows.start] > 0.0) {
+                rows.for_each(|c| active[c] = false);
+            }
         }
     }
-    let (mut cost, mut z) = best?;
-    let mut x = coords.to_x(&z, &from_prior);
-    let mut mu = 1e-3;
-    for _ in 0..MAX_ITERATIONS {
-        let jac = coords.jacobian(&z);
-        let mut grad = jac.transpose() * (&quad.a * &x - &quad.c);
-        let hess = jac.transpose() * &quad.a * &jac;
-        // Coordinates at their bound whose gradient pushes them out are held this step.
-        let held: Vec<bool> = (0..z.len())
-            .map(|i| coords.bounded[i] && z[i] <= 0.0 && grad[i] > 0.0)
-            .collect();
-        for (i, &h) in held.iter().enumerate() {
-            if h {
-                grad[i] = 0.0;
-            }
-        }
-        let mut improved = false;
-        for _ in 0..12 {
-            let mut h = hess.clone();
-            for i in 0..h.nrows() {
-                if held[i] {
-                    h.row_mut(i).fill(0.0);
-                    h.column_mut(i).fill(0.0);
-                    h[(i, i)] = 1.0;
-                } else {
-                    h[(i, i)] += mu * hess[(i, i)].max(1e-12);
-                }
-            }
-            let Some(step) = h.cholesky().map(|c| c.solve(&grad)) else {
-                mu *= 10.0;
-                continue;
-            };
-            let mut trial = &z - step;
-            coords.project(&mut trial);
-            let x_trial = coords.to_x(&trial, &from_prior);
-            let c_trial = quad.cost(&x_trial);
-            if c_trial.is_finite() && c_trial < cost {
-                let gain = cost - c_trial;
-                z = trial;
-                x = x_trial;
-                improved = gain > 1e-12 * cost.abs().max(1e-300);
-                cost = c_trial;
-                mu = (mu / 3.0).max(1e-12);
-                break;
-            }
-            mu *= 4.0;
-        }
-        if !improved {
-            break;
-        }
-    }
+    let (a, c, idx) = reduced_system(normal, &active, prior, ridge);
+    let from_prior: Vec<f64> = idx.iter().map(|&col| prior[col]).collect();
+    let set = Set::new(&idx, bodies, physical, &from_prior);
+    let x = minimise(&a, &c, &set, &from_prior, normal.yy)?;
     let mut full = prior.clone();
     for (r, &col) in idx.iter().enumerate() {
         full[col] = x[r];
     }
     full.iter().all(|v| v.is_finite()).then_some(full)
+}
+
+/// The body minimising `|r p - z|^2` over bodies whose pseudo-inertia is at least `margin`
+/// from singular (the payload's fit); `start` a possible body, the fallback start when the
+/// unconstrained answer has no positive mass distribution at all.
+pub(crate) fn fit_possible_body(
+    r: &DMatrix<f64>,
+    z: &DVector<f64>,
+    start: &[f64; PARAMETERS_PER_BODY],
+    margin: f64,
+) -> Option<[f64; PARAMETERS_PER_BODY]> {
+    let set = Set {
+        bodies: vec![Body::new(std::array::from_fn(|k| k), margin)],
+        bounds: Vec::new(),
+    };
+    let a = r.transpose() * r;
+    let c = r.transpose() * z;
+    let x = minimise(&a, &c, &set, start, z.norm_squared())?;
+    Some(std::array::from_fn(|k| x[k]))
+}
+
+/// The barrier method on `f(x) = x^T A x - 2 c^T x` over `set`; `yy` the torques' sum of
+/// squares (the scale of `f`).
+fn minimise(
+    a: &DMatrix<f64>,
+    c: &DVector<f64>,
+    set: &Set,
+    prior: &[f64],
+    yy: f64,
+) -> Option<DVector<f64>> {
+    let free = a.clone().cholesky()?.solve(c);
+    let f = |x: &DVector<f64>| x.dot(&(a * x)) - 2.0 * c.dot(x);
+    // Already possible (strictly inside): the unconstrained minimum is the minimum.
+    if set.barrier(&free).is_some() {
+        return Some(free);
+    }
+    // A thousandth of what each column alone would explain: a negligible start.
+    let floor: Vec<f64> = (0..c.len())
+        .map(|i| 1e-3 * c[i].abs() / a[(i, i)].max(1e-300) + 1e-12)
+        .collect();
+    let mut x = set.interior_near(&free, prior, &floor);
+    let mut phi = set.barrier(&x)?;
+    let order = set.order();
+    let gap = (GAP * (yy + f(&free)).max(0.0))
+        .max(GAP_FLOOR * yy)
+        .max(1e-300);
+    // The unconstrained minimum bounds the constrained one from below: the start's excess
+    // over it sets the first t.
+    let excess = (f(&x) - f(&free)).max(gap);
+    let mut t = order / excess;
+    let mut steps = 0;
+    loop {
+        // Centring: Newton on t f + barrier.
+        while steps < MAX_NEWTON_STEPS {
+            steps += 1;
+            let ax = a * &x;
+            let mut grad = (&ax - c) * (2.0 * t);
+            let mut hess = a * (2.0 * t);
+            set.add_derivatives(&x, &mut grad, &mut hess)?;
+            let Some(chol) = hess.cholesky() else { break };
+            let d = -chol.solve(&grad);
+            let decrement = -grad.dot(&d);
+            if !(decrement > 1e-9) {
+                break;
+            }
+            // The change of t f along the step, exactly (the cost is quadratic), and of
+            // the barrier: differences never taken between two large totals.
+            let (slope, curve) = (2.0 * (ax - c).dot(&d), d.dot(&(a * &d)));
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..MAX_HALVINGS {
+                let trial = &x + &d * alpha;
+                if let Some(p) = set.barrier(&trial) {
+                    let change = t * (alpha * slope + alpha * alpha * curve) + (p - phi);
+                    if change <= -0.25 * alpha * decrement {
+                        x = trial;
+                        phi = p;
+                        accepted = true;
+                        break;
+                    }
+                }
+                alpha *= 0.5;
+            }
+            if !accepted || decrement < 1e-7 {
+                break;
+            }
+        }
+        if order / t <= gap || steps >= MAX_NEWTON_STEPS {
+            break;
+        }
+        t *= T_GROWTH;
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identification::consistency::is_physically_consistent;
+    use crate::identification::joint_terms::JointTerms;
+    use crate::spatial::Inertia;
+    use rand::{Rng, SeedableRng};
+
+    const P: usize = PARAMETERS_PER_BODY + JOINT_FEATURES;
+
+    /// Normal equations of random rows for one body and one joint, fitted to `truth`.
+    fn normal_toward(truth: &[f64; P], seed: u64) -> Normal {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let w = DMatrix::from_fn(400, P, |_, _| rng.random_range(-1.0..1.0));
+        let x = DVector::from_column_slice(truth);
+        let y = &w * &x + DVector::from_fn(400, |_, _| rng.random_range(-0.01..0.01));
+        Normal {
+            gram: w.transpose() * &w,
+            rhs: w.transpose() * &y,
+            yy: y.norm_squared(),
+            rows: 400,
+        }
+    }
+
+    fn prior() -> DVector<f64> {
+        let body = Inertia {
+            mass: 1.0,
+            first_moment: nalgebra::Vector3::new(0.1, 0.0, 0.0),
+            rotational: nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(0.01, 0.02, 0.02)),
+        };
+        let mut p = DVector::zeros(P);
+        p.rows_mut(0, PARAMETERS_PER_BODY)
+            .copy_from_slice(&body.to_parameters());
+        p
+    }
+
+    fn active() -> Vec<bool> {
+        (0..P).map(|c| c < PARAMETERS_PER_BODY + 5).collect()
+    }
+
+    fn physical(x: &DVector<f64>) -> bool {
+        let mut p = [0.0; PARAMETERS_PER_BODY];
+        p.copy_from_slice(&x.as_slice()[..PARAMETERS_PER_BODY]);
+        let terms = JointTerms::from_coefficients(&x.as_slice()[PARAMETERS_PER_BODY..], 0.01);
+        is_physically_consistent(&Inertia::from_parameters(&p)) && terms.is_physical()
+    }
+
+    #[test]
+    fn a_physical_least_squares_solution_is_returned_as_it_is() {
+        let mut truth = [0.0; P];
+        truth[..PARAMETERS_PER_BODY].copy_from_slice(&prior().as_slice()[..PARAMETERS_PER_BODY]);
+        truth[PARAMETERS_PER_BODY..PARAMETERS_PER_BODY + 5]
+            .copy_from_slice(&[0.3, 0.5, 0.2, 0.1, -0.4]);
+        let normal = normal_toward(&truth, 1);
+        let free =
+            crate::identification::normal::solve(&normal, &active(), &prior(), 1e-9).unwrap();
+        assert!(physical(&free));
+        let x = solve_physical(&normal, &active(), &prior(), 1e-9, 1, true).unwrap();
+        assert!((&x - &free).amax() < 1e-6 * free.amax(), "{x} vs {free}");
+    }
+
+    #[test]
+    fn an_impossible_fit_becomes_the_best_possible_one() {
+        // Negative rotor inertia and viscous friction, a friction curve that pushes, and a
+        // body with negative mass: the free solution is impossible.
+        let mut truth = [0.0; P];
+        truth[..PARAMETERS_PER_BODY]
+            .copy_from_slice(&[-0.5, 0.2, 0.1, 0.0, 0.01, 0.0, -0.02, 0.0, 0.0, 0.03]);
+        truth[PARAMETERS_PER_BODY..PARAMETERS_PER_BODY + 5]
+            .copy_from_slice(&[-0.3, -0.5, -0.2, 0.1, 0.4]);
+        let normal = normal_toward(&truth, 2);
+        let (active, prior) = (active(), prior());
+        let free = crate::identification::normal::solve(&normal, &active, &prior, 1e-9).unwrap();
+        assert!(!physical(&free));
+        let x = solve_physical(&normal, &active, &prior, 1e-9, 1, true).unwrap();
+        assert!(physical(&x), "{x}");
+        // A convex problem: no possible point nearby is better (to the method's gap).
+        let cost = |x: &DVector<f64>| normal.squared_error(x);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut tried = 0;
+        for _ in 0..4000 {
+            let scale = 10f64.powf(rng.random_range(-6.0..-1.0));
+            let mut y = x.clone();
+            for c in (0..P).filter(|&c| active[c]) {
+                y[c] += scale * rng.random_range(-1.0..1.0) * x[c].abs().max(1e-3);
+            }
+            if physical(&y) {
+                tried += 1;
+                assert!(
+                    cost(&y) >= cost(&x) - 1e-7 * normal.yy,
+                    "{} < {}",
+                    cost(&y),
+                    cost(&x)
+                );
+            }
+        }
+        assert!(tried > 100, "only {tried} possible neighbours");
+    }
 }

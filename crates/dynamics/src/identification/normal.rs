@@ -1,6 +1,6 @@
 //! Normal equations of the identification least squares, accumulated per contiguous block
-//! of samples, so that every candidate setting (ridge, spring terms) and every held-out
-//! block is scored without touching the samples again.
+//! of samples and per joint, so that every candidate setting (joint weights, delay, ridge,
+//! spring terms) and every held-out block is scored without touching the samples again.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -25,15 +25,6 @@ pub(crate) struct Normal {
 }
 
 impl Normal {
-    pub fn zeros(p: usize) -> Self {
-        Normal {
-            gram: DMatrix::zeros(p, p),
-            rhs: DVector::zeros(p),
-            yy: 0.0,
-            rows: 0,
-        }
-    }
-
     pub fn sub(&mut self, o: &Normal) {
         self.gram -= &o.gram;
         self.rhs -= &o.rhs;
@@ -50,82 +41,6 @@ impl Normal {
 /// Number of columns for an arm of `n` joints.
 pub(crate) fn columns(n: usize) -> usize {
     (PARAMETERS_PER_BODY + JOINT_FEATURES) * n
-}
-
-/// Fills `row_block` (n x columns) with the regression rows of one sample.
-pub(crate) fn sample_rows(
-    model: &Model,
-    data: &mut Data,
-    samples: &Samples,
-    k: usize,
-    width: f64,
-    out: &mut nalgebra::DMatrixViewMut<f64>,
-) -> Result<(), DynamicsError> {
-    let n = model.nq();
-    let (q, qd, qdd, _) = samples.row(k);
-    let y = joint_torque_regressor(model, data, q, qd, qdd)?;
-    out.view_mut((0, 0), (n, PARAMETERS_PER_BODY * n))
-        .copy_from(y);
-    out.view_mut((0, PARAMETERS_PER_BODY * n), (n, JOINT_FEATURES * n))
-        .fill(0.0);
-    let mut f = [0.0; JOINT_FEATURES];
-    for i in 0..n {
-        features(q[i], qd[i], qdd[i], width, &mut f);
-        for (c, v) in f.iter().enumerate() {
-            out[(i, PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + c)] = *v;
-        }
-    }
-    Ok(())
-}
-
-/// The normal equations of `blocks` contiguous stretches of `samples` (the last takes the
-/// remainder), each joint's rows multiplied by its weight.
-pub(crate) fn accumulate(
-    model: &Model,
-    samples: &Samples,
-    width: f64,
-    blocks: usize,
-    weights: &[f64],
-) -> Result<Vec<Normal>, DynamicsError> {
-    let n = model.nq();
-    let p = columns(n);
-    let len = samples.len();
-    let mut data = Data::new(model);
-    let mut w = DMatrix::zeros(BATCH * n, p);
-    let mut y = DVector::zeros(BATCH * n);
-    let mut out = Vec::with_capacity(blocks);
-    for b in 0..blocks {
-        let (start, end) = (b * len / blocks, (b + 1) * len / blocks);
-        let mut normal = Normal::zeros(p);
-        let mut k = start;
-        while k < end {
-            let m = (end - k).min(BATCH);
-            for s in 0..m {
-                sample_rows(
-                    model,
-                    &mut data,
-                    samples,
-                    k + s,
-                    width,
-                    &mut w.view_mut((s * n, 0), (n, p)),
-                )?;
-                y.rows_mut(s * n, n).copy_from_slice(samples.row(k + s).3);
-                for (i, wi) in weights.iter().enumerate() {
-                    w.row_mut(s * n + i).scale_mut(*wi);
-                    y[s * n + i] *= wi;
-                }
-            }
-            let wb = w.rows(0, m * n);
-            let yb = y.rows(0, m * n);
-            normal.gram.gemm_tr(1.0, &wb, &wb, 1.0);
-            normal.rhs.gemv_tr(1.0, &wb, &yb, 1.0);
-            normal.yy += yb.norm_squared();
-            normal.rows += m * n;
-            k += m;
-        }
-        out.push(normal);
-    }
-    Ok(out)
 }
 
 /// The ridge weight of a column: `ridge` for the inertial parameters (pulled toward the
@@ -199,72 +114,140 @@ pub(crate) fn solve(
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// The normal equations of one stretch as functions of the acceleration gain `a` (the
-/// regressor is affine in the acceleration: `W(a) = W_0 + a W_a`, `W_0` the rows at zero
-/// acceleration) and of a shift of each joint's torque against the motion (right-hand sides
-/// per joint and candidate shift): every candidate gain and delay is scored without
-/// touching the samples again.
+/// Per joint, the unweighted sums of one stretch of samples over the columns that joint's
+/// rows can touch (`JointSums::columns`): the Gram matrix of its rows, their products with
+/// its torque at every candidate shift, and the torque's squares. Joint weights and shifts
+/// are applied afterwards, so one pass over the samples serves every choice.
+#[derive(Clone, Debug)]
+pub(crate) struct JointSums {
+    gram: Vec<DMatrix<f64>>,
+    /// Per joint: one column per shift.
+    rhs: Vec<DMatrix<f64>>,
+    /// Per joint (rows) and shift (columns).
+    yy: DMatrix<f64>,
+    samples: usize,
+}
+
+impl JointSums {
+    /// The columns joint `i`'s rows can be non-zero in, of an arm of `n` joints: the
+    /// bodies from `i` to the tip (a body loads only the joints between it and the base)
+    /// and the joint's own terms.
+    fn columns(i: usize, n: usize) -> impl Iterator<Item = usize> {
+        let inertial = PARAMETERS_PER_BODY * n;
+        (PARAMETERS_PER_BODY * i..inertial)
+            .chain(inertial + JOINT_FEATURES * i..inertial + JOINT_FEATURES * (i + 1))
+    }
+
+    fn zeros(n: usize, shifts: usize) -> Self {
+        let width = |i: usize| Self::columns(i, n).count();
+        JointSums {
+            gram: (0..n).map(|i| DMatrix::zeros(width(i), width(i))).collect(),
+            rhs: (0..n).map(|i| DMatrix::zeros(width(i), shifts)).collect(),
+            yy: DMatrix::zeros(n, shifts),
+            samples: 0,
+        }
+    }
+
+    pub fn sum(parts: &[JointSums]) -> JointSums {
+        let mut total = parts[0].clone();
+        for p in &parts[1..] {
+            total
+                .gram
+                .iter_mut()
+                .zip(&p.gram)
+                .for_each(|(a, b)| *a += b);
+            total.rhs.iter_mut().zip(&p.rhs).for_each(|(a, b)| *a += b);
+            total.yy += &p.yy;
+            total.samples += p.samples;
+        }
+        total
+    }
+
+    /// The normal equations' parts with joint `i`'s rows (and torque) times `weights[i]`.
+    pub fn weighted(&self, weights: &[f64]) -> NormalParts {
+        let n = self.gram.len();
+        let p = columns(n);
+        let shifts = self.yy.ncols();
+        let mut parts = NormalParts {
+            gram: DMatrix::zeros(p, p),
+            rhs: vec![DMatrix::zeros(p, shifts); n],
+            yy: DMatrix::zeros(n, shifts),
+            rows: self.samples * n,
+        };
+        for (i, w) in weights.iter().enumerate() {
+            let w2 = w * w;
+            let cols: Vec<usize> = Self::columns(i, n).collect();
+            for (a, &ca) in cols.iter().enumerate() {
+                for (b, &cb) in cols.iter().enumerate() {
+                    parts.gram[(ca, cb)] += w2 * self.gram[i][(a, b)];
+                }
+                for c in 0..shifts {
+                    parts.rhs[i][(ca, c)] = w2 * self.rhs[i][(a, c)];
+                }
+            }
+            for c in 0..shifts {
+                parts.yy[(i, c)] = w2 * self.yy[(i, c)];
+            }
+        }
+        parts
+    }
+
+    /// Each joint's rms residual of the solution `x` (unweighted, torques unshifted).
+    pub fn rms_errors(&self, x: &DVector<f64>) -> Vec<f64> {
+        let n = self.gram.len();
+        (0..n)
+            .map(|i| {
+                let sub =
+                    DVector::from_iterator(self.gram[i].nrows(), Self::columns(i, n).map(|c| x[c]));
+                let sse = self.yy[(i, 0)] - 2.0 * sub.dot(&self.rhs[i].column(0))
+                    + sub.dot(&(&self.gram[i] * &sub));
+                (sse.max(0.0) / self.samples.max(1) as f64).sqrt()
+            })
+            .collect()
+    }
+}
+
+/// The normal equations of one stretch, weighted, as functions of a shift of each joint's
+/// torque against the motion (right-hand sides per joint and candidate shift): every
+/// candidate delay is scored without touching the samples again.
 #[derive(Clone, Debug)]
 pub(crate) struct NormalParts {
-    g00: DMatrix<f64>,
-    g0a: DMatrix<f64>,
-    gaa: DMatrix<f64>,
-    /// Per joint: `W_0^T y_s` and `W_a^T y_s` of that joint's rows, one column per shift.
-    r0: Vec<DMatrix<f64>>,
-    ra: Vec<DMatrix<f64>>,
+    gram: DMatrix<f64>,
+    /// Per joint: `W^T y_s` of that joint's rows, one column per shift.
+    rhs: Vec<DMatrix<f64>>,
     /// `y_s^T y_s` per joint (rows) and shift (columns).
     yy: DMatrix<f64>,
     pub rows: usize,
 }
 
 impl NormalParts {
-    fn zeros(p: usize, joints: usize, shifts: usize) -> Self {
-        NormalParts {
-            g00: DMatrix::zeros(p, p),
-            g0a: DMatrix::zeros(p, p),
-            gaa: DMatrix::zeros(p, p),
-            r0: vec![DMatrix::zeros(p, shifts); joints],
-            ra: vec![DMatrix::zeros(p, shifts); joints],
-            yy: DMatrix::zeros(joints, shifts),
-            rows: 0,
-        }
-    }
-
-    pub fn add(&mut self, o: &NormalParts) {
-        self.g00 += &o.g00;
-        self.g0a += &o.g0a;
-        self.gaa += &o.gaa;
-        self.r0.iter_mut().zip(&o.r0).for_each(|(a, b)| *a += b);
-        self.ra.iter_mut().zip(&o.ra).for_each(|(a, b)| *a += b);
-        self.yy += &o.yy;
-        self.rows += o.rows;
-    }
-
     pub fn sum(parts: &[NormalParts]) -> NormalParts {
         let mut total = parts[0].clone();
-        parts[1..].iter().for_each(|p| total.add(p));
+        for p in &parts[1..] {
+            total.gram += &p.gram;
+            total.rhs.iter_mut().zip(&p.rhs).for_each(|(a, b)| *a += b);
+            total.yy += &p.yy;
+            total.rows += p.rows;
+        }
         total
     }
 
-    /// The normal equations with acceleration gain `gain` and joint `i`'s torque shifted by
-    /// the `shifts[i]`-th candidate.
-    pub fn at(&self, gain: f64, shifts: &[usize]) -> Normal {
-        let cross = &self.g0a + self.g0a.transpose();
-        let mut rhs = DVector::zeros(self.g00.nrows());
+    /// The normal equations with joint `i`'s torque shifted by the `shifts[i]`-th candidate.
+    pub fn at(&self, shifts: &[usize]) -> Normal {
+        let mut rhs = DVector::zeros(self.gram.nrows());
         let mut yy = 0.0;
         for (i, &s) in shifts.iter().enumerate() {
-            rhs += self.r0[i].column(s) + self.ra[i].column(s) * gain;
+            rhs += self.rhs[i].column(s);
             yy += self.yy[(i, s)];
         }
         Normal {
-            gram: &self.g00 + cross * gain + &self.gaa * (gain * gain),
+            gram: self.gram.clone(),
             rhs,
             yy,
             rows: self.rows,
         }
     }
 }
-
 /// The torque of joint `i` at fractional sample `k + shift` (linear interpolation, held at
 /// the recording's ends).
 pub(crate) fn shifted_torque(samples: &Samples, k: usize, i: usize, shift: f64) -> f64 {
@@ -277,122 +260,63 @@ pub(crate) fn shifted_torque(samples: &Samples, k: usize, i: usize, shift: f64) 
     samples.tau[k0 * n + i] * (1.0 - w) + samples.tau[k1 * n + i] * w
 }
 
-/// [`NormalParts`] of `blocks` contiguous stretches of `samples` (the last takes the
-/// remainder), each joint's rows multiplied by its weight, one right-hand side per shift
-/// (in samples: positive pairs each motion sample with a later torque sample).
-pub(crate) fn accumulate_parts(
+/// [`JointSums`] of the samples `start..end` of `samples`, one right-hand side per shift
+/// (in samples: positive pairs each motion sample with a later torque sample, read across
+/// the stretch's ends). One regressor per sample; each joint's rows multiplied only over
+/// the columns they can touch.
+pub(crate) fn accumulate(
     model: &Model,
     samples: &Samples,
     width: f64,
-    blocks: usize,
-    weights: &[f64],
+    (start, end): (usize, usize),
     shifts: &[f64],
-) -> Result<Vec<NormalParts>, DynamicsError> {
+) -> Result<JointSums, DynamicsError> {
     let n = model.nq();
-    let p = columns(n);
     let s_count = shifts.len();
-    let len = samples.len();
     let mut data = Data::new(model);
-    let mut w0 = DMatrix::zeros(BATCH * n, p);
-    let mut wa = DMatrix::zeros(BATCH * n, p);
-    let mut scratch = DMatrix::zeros(n, p);
-    let mut y = DMatrix::zeros(BATCH * n, s_count);
-    let zeros = vec![0.0; n];
-    let mut out = Vec::with_capacity(blocks);
-    for b in 0..blocks {
-        let (start, end) = (b * len / blocks, (b + 1) * len / blocks);
-        let mut parts = NormalParts::zeros(p, n, s_count);
-        let mut k = start;
-        while k < end {
-            let m = (end - k).min(BATCH);
-            for s in 0..m {
-                let (q, qd, qdd, _) = samples.row(k + s);
-                rows_at(
-                    model,
-                    &mut data,
-                    q,
-                    qd,
-                    &zeros,
-                    width,
-                    &mut w0.view_mut((s * n, 0), (n, p)),
-                )?;
-                rows_at(
-                    model,
-                    &mut data,
-                    q,
-                    &zeros,
-                    qdd,
-                    width,
-                    &mut wa.view_mut((s * n, 0), (n, p)),
-                )?;
-                rows_at(
-                    model,
-                    &mut data,
-                    q,
-                    &zeros,
-                    &zeros,
-                    width,
-                    &mut scratch.view_mut((0, 0), (n, p)),
-                )?;
-                let mut block = wa.view_mut((s * n, 0), (n, p));
-                block -= &scratch;
-                for i in 0..n {
-                    for (c, shift) in shifts.iter().enumerate() {
-                        y[(s * n + i, c)] = shifted_torque(samples, k + s, i, *shift) * weights[i];
-                    }
-                    w0.row_mut(s * n + i).scale_mut(weights[i]);
-                    wa.row_mut(s * n + i).scale_mut(weights[i]);
-                }
-            }
-            let (w0b, wab) = (w0.rows(0, m * n), wa.rows(0, m * n));
-            parts.g00.gemm_tr(1.0, &w0b, &w0b, 1.0);
-            parts.g0a.gemm_tr(1.0, &w0b, &wab, 1.0);
-            parts.gaa.gemm_tr(1.0, &wab, &wab, 1.0);
-            // Each joint's rows on their own: its torque may be shifted differently.
-            for i in 0..n {
-                for s in 0..m {
-                    let r = s * n + i;
-                    let (w0r, war) = (w0.row(r), wa.row(r));
-                    for c in 0..s_count {
-                        let yv = y[(r, c)];
-                        if yv != 0.0 {
-                            parts.r0[i].column_mut(c).axpy(yv, &w0r.transpose(), 1.0);
-                            parts.ra[i].column_mut(c).axpy(yv, &war.transpose(), 1.0);
-                        }
-                        parts.yy[(i, c)] += yv * yv;
-                    }
-                }
-            }
-            parts.rows += m * n;
-            k += m;
-        }
-        out.push(parts);
-    }
-    Ok(out)
-}
-
-/// The regression rows of one sample `(q, qd, qdd)` into `out` (n x columns).
-fn rows_at(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    qd: &[f64],
-    qdd: &[f64],
-    width: f64,
-    out: &mut nalgebra::DMatrixViewMut<f64>,
-) -> Result<(), DynamicsError> {
-    let n = model.nq();
-    let y = joint_torque_regressor(model, data, q, qd, qdd)?;
-    out.view_mut((0, 0), (n, PARAMETERS_PER_BODY * n))
-        .copy_from(y);
-    out.view_mut((0, PARAMETERS_PER_BODY * n), (n, JOINT_FEATURES * n))
-        .fill(0.0);
+    let cols: Vec<Vec<usize>> = (0..n).map(|i| JointSums::columns(i, n).collect()).collect();
+    // Per joint, a batch of its rows (one column per sample) and of its torques.
+    let mut rows: Vec<DMatrix<f64>> = cols
+        .iter()
+        .map(|c| DMatrix::zeros(c.len(), BATCH))
+        .collect();
+    let mut torques = vec![DMatrix::zeros(BATCH, s_count); n];
     let mut f = [0.0; JOINT_FEATURES];
-    for i in 0..n {
-        features(q[i], qd[i], qdd[i], width, &mut f);
-        for (c, v) in f.iter().enumerate() {
-            out[(i, PARAMETERS_PER_BODY * n + JOINT_FEATURES * i + c)] = *v;
+    let inertial = PARAMETERS_PER_BODY * n;
+    let mut sums = JointSums::zeros(n, s_count);
+    let mut k = start;
+    while k < end {
+        let m = (end - k).min(BATCH);
+        for s in 0..m {
+            let (q, qd, qdd, _) = samples.row(k + s);
+            let y = joint_torque_regressor(model, &mut data, q, qd, qdd)?;
+            for i in 0..n {
+                features(q[i], qd[i], qdd[i], width, &mut f);
+                let mut column = rows[i].column_mut(s);
+                for (r, &c) in cols[i].iter().enumerate() {
+                    column[r] = if c < inertial {
+                        y[(i, c)]
+                    } else {
+                        f[c - inertial - JOINT_FEATURES * i]
+                    };
+                }
+                for (c, shift) in shifts.iter().enumerate() {
+                    torques[i][(s, c)] = shifted_torque(samples, k + s, i, *shift);
+                }
+            }
         }
+        for i in 0..n {
+            let batch = rows[i].columns(0, m);
+            let transposed = batch.transpose();
+            let y = torques[i].rows(0, m);
+            sums.gram[i].gemm(1.0, &batch, &transposed, 1.0);
+            sums.rhs[i].gemm(1.0, &batch, &y, 1.0);
+            for c in 0..s_count {
+                sums.yy[(i, c)] += y.column(c).norm_squared();
+            }
+        }
+        sums.samples += m;
+        k += m;
     }
-    Ok(())
+    Ok(sums)
 }

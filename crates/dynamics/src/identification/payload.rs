@@ -8,14 +8,15 @@
 //! `Y_j(q, q', q'')`, times the payload's parameters in that body's joint frame. Those are a
 //! linear function of its parameters in the tip frame (the tip frame's fixed placement on
 //! the body: [`Inertia::transformed`]), so the regressor of the tip-frame parameters is
-//! `Y_j T` with a constant 10 x 10 `T`. The fit is least squares over the log-Cholesky
-//! coordinates of the payload's pseudo-inertia (Rucker and Wensing 2022), so every answer is
-//! a physically possible body; when the plain least-squares answer already is one, it is
-//! that answer.
+//! `Y_j T` with a constant 10 x 10 `T`. The fit is least squares over physically possible
+//! bodies (the payload's pseudo-inertia positive definite: a convex set, the barrier method
+//! of `constrained.rs`); when the plain least-squares answer already is one, it is that
+//! answer.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 
-use super::consistency::{from_log_cholesky, margin, project, to_log_cholesky};
+use super::consistency::{margin, project};
+use super::constrained::fit_possible_body;
 use super::{Identification, Samples};
 use crate::algorithms::regressor::{joint_torque_regressor, PARAMETERS_PER_BODY};
 use crate::data::Data;
@@ -29,8 +30,6 @@ type Vector10 = SVector<f64, PARAMETERS_PER_BODY>;
 /// Ridge toward no payload, relative to each parameter's column scale: only directions the
 /// motion does not excite at all feel it.
 const RELATIVE_RIDGE: f64 = 1e-12;
-/// Levenberg-Marquardt iterations of the constrained fit.
-const ITERATIONS: usize = 300;
 /// Fewest samples a payload fit takes.
 const MIN_SAMPLES: usize = 20;
 
@@ -161,8 +160,8 @@ fn tip_body(model: &Model) -> Result<(usize, DMatrix<f64>), DynamicsError> {
     Ok((body, t))
 }
 
-/// Least squares `||R pi - z||^2` over physically possible bodies: Levenberg-Marquardt on
-/// the log-Cholesky coordinates, from the nearest possible body to the plain answer.
+/// Least squares `||R pi - z||^2` over physically possible bodies (the barrier method of
+/// `constrained.rs`), started near the plain answer.
 fn constrained_fit(
     r: &Matrix10,
     z: &Vector10,
@@ -170,62 +169,13 @@ fn constrained_fit(
 ) -> [f64; PARAMETERS_PER_BODY] {
     let start = project(plain, 0.0).unwrap_or_else(|| fallback_start(r, z));
     let margin = margin(&start);
-    let mut theta = to_log_cholesky(&start, margin)
-        .or_else(|| to_log_cholesky(&fallback_start(r, z), margin))
-        .unwrap_or([0.0; PARAMETERS_PER_BODY]);
-    let residual =
-        |t: &[f64; PARAMETERS_PER_BODY]| r * Vector10::from(from_log_cholesky(t, margin)) - z;
-    let mut current = residual(&theta).norm_squared();
-    let mut damping = 1e-3;
-    for _ in 0..ITERATIONS {
-        let jac = r * parameter_jacobian(&theta, margin);
-        let gradient = jac.transpose() * residual(&theta);
-        let hessian = jac.transpose() * jac;
-        let diagonal = hessian.diagonal().map(|d| d.max(1e-300));
-        let mut improved = false;
-        while damping < 1e12 {
-            let lhs = hessian + Matrix10::from_diagonal(&diagonal) * damping;
-            let Some(step) = lhs.cholesky().map(|c| c.solve(&gradient)) else {
-                damping *= 10.0;
-                continue;
-            };
-            let trial: [f64; PARAMETERS_PER_BODY] = std::array::from_fn(|i| theta[i] - step[i]);
-            let c = residual(&trial).norm_squared();
-            if c.is_finite() && c < current {
-                let gain = current - c;
-                (theta, current, improved) = (trial, c, true);
-                damping = (damping * 0.3).max(1e-12);
-                if gain <= 1e-14 * current {
-                    return from_log_cholesky(&theta, margin);
-                }
-                break;
-            }
-            damping *= 10.0;
-        }
-        if !improved {
-            break;
-        }
-    }
-    from_log_cholesky(&theta, margin)
-}
-
-/// Central-difference Jacobian of the inertial parameters by the log-Cholesky coordinates.
-fn parameter_jacobian(theta: &[f64; PARAMETERS_PER_BODY], margin: f64) -> Matrix10 {
-    let mut jac = Matrix10::zeros();
-    for k in 0..PARAMETERS_PER_BODY {
-        let h = 1e-6 * theta[k].abs().max(1e-3);
-        let (mut up, mut down) = (*theta, *theta);
-        up[k] += h;
-        down[k] -= h;
-        let (pu, pd) = (
-            from_log_cholesky(&up, margin),
-            from_log_cholesky(&down, margin),
-        );
-        for i in 0..PARAMETERS_PER_BODY {
-            jac[(i, k)] = (pu[i] - pd[i]) / (2.0 * h);
-        }
-    }
-    jac
+    let (r_dyn, z_dyn) = (
+        DMatrix::from_column_slice(PARAMETERS_PER_BODY, PARAMETERS_PER_BODY, r.as_slice()),
+        nalgebra::DVector::from_column_slice(z.as_slice()),
+    );
+    fit_possible_body(&r_dyn, &z_dyn, &start, margin)
+        .or_else(|| fit_possible_body(&r_dyn, &z_dyn, &fallback_start(r, z), margin))
+        .unwrap_or(start)
 }
 
 /// A start when the plain answer has no positive mass distribution: a compact body of the

@@ -30,9 +30,9 @@ pub struct IdentificationSettings {
     /// How much of the measured acceleration the prediction trusts (0 to 1); `None`
     /// (default): chosen on held-out motion (see `IdentificationSummary::acceleration_gain`).
     pub acceleration_gain: Option<f64>,
-    /// The samples' rate (Hz). When given, the delay of the torque behind the motion (up to
-    /// 2 samples either way, in half samples) is chosen on held-out motion and stored as
-    /// `delay_s`; `None` (default): no delay.
+    /// The samples' rate (Hz). When given, one delay of the torques behind the motion (up to
+    /// 30 ms or 2 samples either way, at most 25 candidates) is chosen on held-out motion
+    /// and stored as `delay_s`; `None` (default): no delay.
     pub sample_rate_hz: Option<f64>,
 }
 

@@ -253,6 +253,8 @@ def estimate(observer, cond, cfg):
 # faster one may cost on the validation recording.
 ESTIMATE_CUTOFFS_HZ = (5.0, 10.0, 20.0, 40.0)
 ESTIMATE_NOISE_MARGIN = 0.1
+# The estimate low-pass without a validation recording to choose it on (Hz).
+ONE_RECORDING_ESTIMATE_CUTOFF_HZ = 10.0
 
 
 def choose_estimate_cutoff(m, ident, nets, valid, cfg):
@@ -317,7 +319,12 @@ def _run_arm(name, cfg, log, robots, stage):
     t0 = time.perf_counter()
     train_motion, cond_train = excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
     eval_motion, cond_eval = excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
-    valid_motion, cond_valid = excitation_motion(m, cfg.validation_duration, cfg.validation_seed, cfg.dt)
+    # No validation recording (duration 0): one recording, as a user with one has; every
+    # fit chooses on blocked cross-validation of it, and the estimate low-pass is 10 Hz.
+    one_recording = cfg.validation_duration <= 0
+    valid_motion, cond_valid = (None, None) if one_recording else excitation_motion(
+        m, cfg.validation_duration, cfg.validation_seed, cfg.dt
+    )
     timings["excitation"] = time.perf_counter() - t0
 
     stage("recording 4 runs in MuJoCo")
@@ -325,7 +332,7 @@ def _run_arm(name, cfg, log, robots, stage):
     gains = recording_gains(m, train_motion["q"].mean(axis=0), arm.terms)
     rng = np.random.default_rng(cfg.seed)
     train, _, tracking_train = record(arm, m, train_motion, gains, cfg, rng)
-    valid, _, _ = record(arm, m, valid_motion, gains, cfg, rng)
+    valid = None if one_recording else record(arm, m, valid_motion, gains, cfg, rng)[0]
     free, free_true, tracking_eval = record(arm, m, eval_motion, gains, cfg, rng)
     push, peak, windows = push_schedule(cfg, m, cfg.evaluation_duration, rng)
     pushed, pushed_true, _ = record(arm, m, eval_motion, gains, cfg, rng, push)
@@ -349,6 +356,8 @@ def _run_arm(name, cfg, log, robots, stage):
     stage("evaluating 5 observers")
     t0 = time.perf_counter()
     cutoff_scan = None
+    if cfg.estimate_cutoff_hz <= 0 and one_recording:
+        cfg = replace(cfg, estimate_cutoff_hz=ONE_RECORDING_ESTIMATE_CUTOFF_HZ)
     if cfg.estimate_cutoff_hz <= 0:
         cutoff, cutoff_scan = choose_estimate_cutoff(m, ident, nets, valid, cfg)
         cfg = replace(cfg, estimate_cutoff_hz=cutoff)
