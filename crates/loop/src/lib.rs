@@ -70,6 +70,8 @@ mod signal;
 mod stage;
 mod validate;
 
+/// The contact flags a [`RobotStatus`] carries (issue 31).
+pub use admittance_control::ContactState;
 pub use chain::SignalChain;
 pub use closed_loop::{ClosedLoop, EstimateToController, LoopInput, LoopParts, LoopStatus};
 pub use conditioning::InputConditioner;
@@ -77,6 +79,7 @@ pub use config::{
     ControllerConfig, ControllerKind, JointAdmittanceConfig, LoopConfig, NoTraining,
     ObserverConfig, ObserverKind, DEFAULT_CONTROL_RATE_HZ,
 };
+pub use delay::InputDelay;
 pub use deployment::{
     write_deployment, Deployment, DEPLOYMENT_FORMAT, DEPLOYMENT_VERSION, LOOP_FILE, MANIFEST_FILE,
 };

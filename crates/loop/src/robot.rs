@@ -321,6 +321,12 @@ impl RobotLoop {
         self.n
     }
 
+    /// Whether the loop detects contact (a contact floor was given): each step's status
+    /// then carries the flags.
+    pub fn has_contact_floor(&self) -> bool {
+        self.contact.is_some()
+    }
+
     /// Joint names in chain order.
     pub fn joints(&self) -> &[String] {
         &self.joints

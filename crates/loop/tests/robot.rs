@@ -43,6 +43,22 @@ fn robot_loop(overrides: &[&str]) -> RobotLoop {
     RobotLoop::new(model(), &config, Path::new("."), None, None).unwrap()
 }
 
+/// One 1 kHz step with measured angles and torques.
+fn step_measured(
+    l: &mut RobotLoop,
+    k: usize,
+    q: &[f64],
+    tau: &[f64],
+) -> admittance_loop::RobotStatus {
+    l.step(&RobotInput {
+        time: k as f64 * 1e-3,
+        q,
+        qdot: None,
+        tau: Some(tau),
+        desired: None,
+    })
+}
+
 /// A slow motion around the pose with the torque its inverse dynamics needs.
 fn motion(model: &Model, data: &mut Data, k: usize) -> ([f64; 7], [f64; 7]) {
     let t = k as f64 * 1e-3;
@@ -122,13 +138,7 @@ fn each_gate_flags_its_sample_and_the_estimate_forgets_it() {
                     _ => {}
                 }
             }
-            let s = l.step(&RobotInput {
-                time: k as f64 * 1e-3,
-                q: &q,
-                qdot: None,
-                tau: Some(&tau),
-                desired: None,
-            });
+            let s = step_measured(&mut l, k, &q, &tau);
             out.push((
                 s,
                 l.external_torque_estimate().to_vec(),
@@ -264,13 +274,7 @@ fn the_identifications_torque_delay_is_applied_at_run_time() {
         for k in 0..4000 {
             let (q, _) = motion(&model, &mut data, k);
             let (_, tau) = motion(&model, &mut data, k.saturating_sub(20));
-            let s = l.step(&RobotInput {
-                time: k as f64 * 1e-3,
-                q: &q,
-                qdot: None,
-                tau: Some(&tau),
-                desired: None,
-            });
+            let s = step_measured(&mut l, k, &q, &tau);
             assert!(s.is_ok() || k < 10, "step {k}");
             if k >= 2000 {
                 sum += l

@@ -9,7 +9,7 @@ use admittance_control::{
     ContactCalibrationConfig, ContactDetector, ContactFloor, ContactState, JointValues,
     MomentumObserver, MomentumObserverConfig, Observer, ObserverInput,
 };
-use admittance_loop::InputConditioner;
+use admittance_loop::{InputConditioner, InputDelay};
 use admittance_scenario::FreeMotionData;
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -144,6 +144,9 @@ pub struct PyContactDetector {
     detector: ContactDetector,
     filter_hz: f64,
     conditioner: Option<(f64, InputConditioner)>,
+    /// The identification's torque delays, and their delay line at a rate.
+    delay_s: Vec<f64>,
+    delay: Option<(f64, Option<InputDelay>)>,
     n: usize,
     /// `q, qdot, qddot, tau`, `n` each.
     input: Vec<f64>,
@@ -187,6 +190,8 @@ impl PyContactDetector {
             detector,
             filter_hz: id.summary.input_filter_hz,
             conditioner: None,
+            delay_s: id.summary.delay_s.clone(),
+            delay: None,
             n,
             input: vec![0.0; 4 * n],
             estimate: vec![0.0; n],
@@ -236,6 +241,24 @@ impl PyContactDetector {
                 rest[..n].copy_from_slice(&c.qdot);
                 rest[n..2 * n].copy_from_slice(&c.qddot);
                 rest[2 * n..].copy_from_slice(&c.tau);
+            }
+        }
+        // The identification's torque delay, as the run-time loop applies it.
+        if dt.is_finite() && dt > 0.0 && self.delay_s.iter().any(|d| *d != 0.0) {
+            let rate = 1.0 / dt;
+            if self
+                .delay
+                .as_ref()
+                .is_none_or(|(r, _)| (r - rate).abs() > 1e-6 * rate)
+            {
+                let line = InputDelay::new(&self.delay_s, rate)
+                    .map_err(|e| value_error(format!("ContactDetector: {e}")))?;
+                self.delay = Some((rate, line));
+            }
+            if let Some((_, Some(line))) = self.delay.as_mut() {
+                let (q, rest) = b.split_at(n);
+                let delayed = line.update(q, &rest[..n], &rest[n..2 * n], &rest[2 * n..]);
+                b.copy_from_slice(delayed);
             }
         }
         let input = ObserverInput {

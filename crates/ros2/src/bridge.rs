@@ -9,8 +9,11 @@
 
 use std::path::PathBuf;
 
-use admittance_bag::msgs::{Header, JointState, Vector3, Wrench, WrenchStamped};
-use admittance_bag::{Profile, JOINT_STATE, WRENCH_STAMPED};
+use admittance_bag::msgs::{
+    Float64MultiArray, Header, JointState, MultiArrayDimension, MultiArrayLayout, Vector3, Wrench,
+    WrenchStamped,
+};
+use admittance_bag::{Profile, FLOAT64_MULTI_ARRAY, JOINT_STATE, WRENCH_STAMPED};
 use admittance_loop::{RobotInput, RobotLoop, RobotStatus};
 
 /// The axes of the published wrench.
@@ -415,8 +418,29 @@ impl Bridge {
     }
 }
 
+/// The contact flags of a step (issue 31), when the loop has a contact floor: a
+/// `std_msgs/msg/Float64MultiArray` `[contact, collision, link]`: 1 or 0, 1 or 0, and the
+/// last loaded joint (from 0, in chain order; -1 when none), its layout's one dimension
+/// labelled `contact,collision,link`. The message has no header: one is published per
+/// torque message, after it.
+pub fn contact_message(status: &RobotStatus) -> Option<Float64MultiArray> {
+    let c = status.contact?;
+    let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    Some(Float64MultiArray {
+        layout: MultiArrayLayout {
+            dim: vec![MultiArrayDimension {
+                label: "contact,collision,link".into(),
+                size: 3,
+                stride: 3,
+            }],
+            data_offset: 0,
+        },
+        data: vec![flag(c.contact), flag(c.collision), f64::from(c.link)],
+    })
+}
+
 /// The message types the bridge publishes (for the node and the docs).
-pub const OUTPUT_TYPES: [&str; 2] = [JOINT_STATE, WRENCH_STAMPED];
+pub const OUTPUT_TYPES: [&str; 3] = [JOINT_STATE, WRENCH_STAMPED, FLOAT64_MULTI_ARRAY];
 
 /// The same bridge run offline over `messages` in order: per message, the estimate (or
 /// why it was skipped).

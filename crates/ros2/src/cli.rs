@@ -77,6 +77,10 @@ pub struct BridgeArgs {
     /// Axes of the wrench: the base link's or the tip link's (its frame_id).
     #[arg(long, value_enum, default_value = "base")]
     pub wrench_frame: WrenchFrame,
+    /// Topic of the contact flags (Float64MultiArray `[contact, collision, link]`, issue 31),
+    /// published when the deployment has a contact floor (`[contact] floor`).
+    #[arg(long, default_value = "/admittance/contact")]
+    pub contact_topic: String,
     /// Also publish the admittance model's compliant reference (JointState position and
     /// velocity) on this topic.
     #[arg(long)]
@@ -257,7 +261,12 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
         a.reference_topic
             .as_ref()
             .map(|t| format!(" and {t} (compliant reference)"))
-            .unwrap_or_default(),
+            .unwrap_or_default()
+            + &if bridge.rust_loop().has_contact_floor() {
+                format!(" and {} (contact flags)", a.contact_topic)
+            } else {
+                String::new()
+            },
         dds.domain_id,
         if dds.localhost_only { " (localhost only)" } else { "" },
         1.0 / bridge.dt(),
@@ -268,6 +277,7 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
         torque_topic: a.torque_topic.clone(),
         wrench_topic: a.wrench_topic.clone(),
         reference_topic: a.reference_topic.clone(),
+        contact_topic: a.contact_topic.clone(),
         duration: run_for,
     };
     let mut seen = BTreeSet::new();

@@ -24,4 +24,6 @@ pub mod cli;
 pub mod node;
 pub mod stats;
 
-pub use bridge::{offline, Bridge, BridgeConfig, InputError, InputMap, Stepped, WrenchFrame};
+pub use bridge::{
+    contact_message, offline, Bridge, BridgeConfig, InputError, InputMap, Stepped, WrenchFrame,
+};

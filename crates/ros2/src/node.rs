@@ -9,7 +9,7 @@ use std::net::Ipv4Addr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use admittance_bag::msgs::{Header, JointState, Time, WrenchStamped};
+use admittance_bag::msgs::{Float64MultiArray, Header, JointState, Time, WrenchStamped};
 use ros2_client::qos::{History, WhenFull};
 use ros2_client::{
     Context, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile,
@@ -19,7 +19,7 @@ use rustdds_api::mio1::{Events, Interest, Poll, Token};
 use rustdds_api::DomainParticipantBuilder;
 use serde::{Deserialize, Serialize};
 
-use crate::bridge::Bridge;
+use crate::bridge::{contact_message, Bridge};
 use crate::stats::{stamp_rate, BridgeStats, Percentiles};
 
 use ros2_client::dds::rustdds as rustdds_api;
@@ -90,6 +90,7 @@ fn node(context: &Context, name: &str) -> Result<Node, String> {
 
 const JOINT_STATE_TYPE: (&str, &str) = ("sensor_msgs", "JointState");
 const WRENCH_STAMPED_TYPE: (&str, &str) = ("geometry_msgs", "WrenchStamped");
+const FLOAT64_MULTI_ARRAY_TYPE: (&str, &str) = ("std_msgs", "Float64MultiArray");
 
 /// Best-effort, keep-last 1000: the sensor-data input. The deep queue keeps every message
 /// through a stall of the bridge's thread of up to a second at 1 kHz (the observer wants
@@ -157,6 +158,9 @@ pub struct BridgeTopics {
     pub wrench_topic: String,
     /// The admittance model's compliant reference (JointState position, velocity), if wanted.
     pub reference_topic: Option<String>,
+    /// Contact flags (Float64MultiArray `[contact, collision, link]`), published when the
+    /// loop has a contact floor.
+    pub contact_topic: String,
     /// Stop after this long (none: until SIGINT or SIGTERM).
     pub duration: Option<Duration>,
 }
@@ -185,6 +189,12 @@ pub fn run_bridge(
         &mut node,
         &topics.wrench_topic,
         WRENCH_STAMPED_TYPE,
+        output_qos(100),
+    )?;
+    let contact_pub = publisher::<Float64MultiArray>(
+        &mut node,
+        &topics.contact_topic,
+        FLOAT64_MULTI_ARRAY_TYPE,
         output_qos(100),
     )?;
     let reference_pub = match &topics.reference_topic {
@@ -245,6 +255,9 @@ pub fn run_bridge(
                     ok &= wrench_pub.publish(bridge.wrench_message(&header)).is_ok();
                     if let Some(p) = &reference_pub {
                         ok &= p.publish(bridge.reference_message(&header)).is_ok();
+                    }
+                    if let Some(flags) = contact_message(&stepped.status) {
+                        ok &= contact_pub.publish(flags).is_ok();
                     }
                     let done_wall = wall_ns();
                     take_ns.push(taken.elapsed().as_nanos() as i64);

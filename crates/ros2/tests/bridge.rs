@@ -11,7 +11,7 @@ use admittance_bag::msgs::JointState;
 use admittance_bag::Profile;
 use admittance_loop::{RobotInput, RobotLoop};
 use admittance_ros2::node::fake_sample;
-use admittance_ros2::{offline, Bridge, BridgeConfig, WrenchFrame};
+use admittance_ros2::{contact_message, offline, Bridge, BridgeConfig, WrenchFrame};
 
 /// The deployment folder, written once for the whole test binary.
 fn deployment() -> PathBuf {
@@ -227,4 +227,24 @@ fn profiles_and_joint_lists_it_cannot_use_are_named() {
     let mut b = Bridge::new(&c).unwrap();
     b.process(&fake_sample(0, &fr3, T0, MS)).unwrap();
     assert_eq!(b.torque_message(&Default::default()).name, fr3);
+}
+
+#[test]
+fn contact_flags_are_published_only_with_a_contact_floor() {
+    // The test deployment has no floor: no flags, no message.
+    let mut bridge = Bridge::new(&config("franka")).unwrap();
+    let stepped = bridge.process(&messages(1, &chain())[0]).unwrap();
+    assert!(!bridge.rust_loop().has_contact_floor());
+    assert!(contact_message(&stepped.status).is_none());
+    // With flags: [contact, collision, link] and the layout's label.
+    let mut status = stepped.status;
+    status.contact = Some(admittance_loop::ContactState {
+        contact: true,
+        collision: false,
+        link: 4,
+    });
+    let m = contact_message(&status).unwrap();
+    assert_eq!(m.data, [1.0, 0.0, 4.0]);
+    assert_eq!(m.layout.dim[0].label, "contact,collision,link");
+    assert_eq!(m.values().unwrap().len(), 3);
 }

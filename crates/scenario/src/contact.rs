@@ -67,7 +67,8 @@ impl FreeMotionEstimates {
 }
 
 /// Runs the momentum observer on `identification` over `data` (conditioned at the
-/// identification's `input_filter_hz`, as the observers are at run time).
+/// identification's `input_filter_hz` and paired with its torque delay, as the observers
+/// are at run time).
 pub fn momentum_estimates(
     data: &FreeMotionData,
     identification: &Identification,
@@ -95,8 +96,21 @@ pub fn momentum_estimates(
         qddot: Vec::with_capacity(data.len() * n),
     };
     let mut estimate = vec![0.0; n];
+    // The identification's torque delay, applied as the run-time loop applies it.
+    let rate = crate::identify_recording::sample_rate_hz(data);
+    let mut delay = admittance_loop::InputDelay::new(&identification.summary.delay_s, rate)
+        .map_err(|e| ConfigError::new("identification", e.to_string()))?;
+    let mut delayed = vec![0.0; 4 * n];
     for k in 0..data.len() {
-        let row = &x[k * 3 * n..(k + 1) * 3 * n];
+        let mut row = &x[k * 3 * n..(k + 1) * 3 * n];
+        let mut torque = &tau[k * n..(k + 1) * n];
+        if let Some(d) = delay.as_mut() {
+            let (q, rest) = row.split_at(n);
+            let (qd, qdd) = rest.split_at(n);
+            delayed.copy_from_slice(d.update(q, qd, qdd, torque));
+            row = &delayed[..3 * n];
+            torque = &delayed[3 * n..];
+        }
         let dt = if k == 0 {
             data.t.get(1).map_or(1e-3, |t1| t1 - data.t[0])
         } else {
@@ -107,7 +121,7 @@ pub fn momentum_estimates(
             q: &row[..n],
             qdot: &row[n..2 * n],
             qddot: &row[2 * n..],
-            tau_commanded: &tau[k * n..(k + 1) * n],
+            tau_commanded: torque,
         };
         if !obs.update(&input, dt, &mut estimate).is_ok() {
             estimate.iter_mut().for_each(|e| *e = 0.0);
