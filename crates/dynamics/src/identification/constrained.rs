@@ -181,12 +181,12 @@ impl Set {
         }
         for row in &self.bounds {
             if Self::bound(row, &z) <= 0.0 {
-                // A single column, or the Coulomb pair (t, u both set to their floor).
+                // A single column, or the Coulomb pair: F_c2 at the floor and F_c1 within
+                // [0, floor], so that both 10 F_c1 + F_c2 and F_c1 + F_c2 are positive.
                 match row.as_slice() {
                     [(c, _)] => z[*c] = floor[*c],
                     [(first, _), (second, _)] => {
                         let f = floor[*first];
-                        // 10 F_c1 + F_c2 = F_c1 + F_c2 = f: F_c1 = 0, F_c2 = f.
                         z[*first] = z[*first].max(0.0).min(f);
                         z[*second] = f;
                     }

@@ -97,7 +97,7 @@ pub struct IdentificationSummary {
     pub input_filter_hz: f64,
     /// Per joint: how much later its torque signal is than the motion signals (s;
     /// negative: earlier; empty: none). `identify` chooses one delay for all joints on
-    /// held-out motion (kept when it lowers the error by 1 %). Consumers pair each joint's
+    /// held-out motion (kept when it removes a fifth of the error). Consumers pair each joint's
     /// torque with the motion this much older.
     #[serde(default)]
     pub delay_s: Vec<f64>,

@@ -214,6 +214,20 @@ fn bad_samples_and_settings_are_named() {
     };
     let e = identify(&urdf, &train, None, &bad).unwrap_err().to_string();
     assert!(e.contains("folds"), "{e}");
+    // No torque recorded (a missing column read as zeros): refused, not a massless arm.
+    let zeros = vec![0.0; q.len()];
+    let e = identify(
+        &urdf,
+        &Samples {
+            tau: &zeros,
+            ..train
+        },
+        None,
+        &IdentificationSettings::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("torque is 0 in every sample"), "{e}");
 }
 
 #[test]

@@ -253,13 +253,12 @@ def estimate(observer, cond, cfg):
 # faster one may cost on the validation recording.
 ESTIMATE_CUTOFFS_HZ = (5.0, 10.0, 20.0, 40.0)
 ESTIMATE_NOISE_MARGIN = 0.1
-# The estimate low-pass without a validation recording to choose it on (Hz).
-ONE_RECORDING_ESTIMATE_CUTOFF_HZ = 10.0
 
 
 def choose_estimate_cutoff(m, ident, nets, valid, cfg):
     """The fastest estimate low-pass whose false torque on the validation recording (free
-    motion that no fit trained on and the evaluation never uses) stays within
+    motion that no fit trained on and the evaluation never uses; the training recording
+    when there is none) stays within
     ``ESTIMATE_NOISE_MARGIN`` of the slowest's: a faster estimate follows a push with less
     lag, a slower one holds more noise back. The hybrid chooses; every observer then uses it.
     Returns the cutoff and the false torque (N m rms) of each candidate."""
@@ -320,7 +319,8 @@ def _run_arm(name, cfg, log, robots, stage):
     train_motion, cond_train = excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
     eval_motion, cond_eval = excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
     # No validation recording (duration 0): one recording, as a user with one has; every
-    # fit chooses on blocked cross-validation of it, and the estimate low-pass is 10 Hz.
+    # fit chooses on blocked cross-validation of it, and the estimate low-pass is chosen on
+    # it (a trade of noise against lag, which the fits' own motion shows as well).
     one_recording = cfg.validation_duration <= 0
     valid_motion, cond_valid = (None, None) if one_recording else excitation_motion(
         m, cfg.validation_duration, cfg.validation_seed, cfg.dt
@@ -356,10 +356,8 @@ def _run_arm(name, cfg, log, robots, stage):
     stage("evaluating 5 observers")
     t0 = time.perf_counter()
     cutoff_scan = None
-    if cfg.estimate_cutoff_hz <= 0 and one_recording:
-        cfg = replace(cfg, estimate_cutoff_hz=ONE_RECORDING_ESTIMATE_CUTOFF_HZ)
     if cfg.estimate_cutoff_hz <= 0:
-        cutoff, cutoff_scan = choose_estimate_cutoff(m, ident, nets, valid, cfg)
+        cutoff, cutoff_scan = choose_estimate_cutoff(m, ident, nets, train if one_recording else valid, cfg)
         cfg = replace(cfg, estimate_cutoff_hz=cutoff)
     cond_free, cond_pushed = conditioned(free, cfg), conditioned(pushed, cfg)
     observers = {}

@@ -16,7 +16,7 @@ def main(argv=None):
     p.add_argument("--arms", help="comma-separated subset (default: all)")
     p.add_argument("--training-duration", type=float, default=60.0)
     p.add_argument("--evaluation-duration", type=float, default=30.0)
-    p.add_argument("--validation-duration", type=float, default=20.0, help="seconds of a third excitation (seed 3) that chooses every setting; 0: none (one recording: blocked cross-validation chooses, the estimate low-pass is 10 Hz unless given)")
+    p.add_argument("--validation-duration", type=float, default=20.0, help="seconds of a third excitation (seed 3) that chooses every setting; 0: none (one recording: blocked cross-validation chooses, and the estimate low-pass is chosen on the training recording)")
     p.add_argument("--nodes", type=int, default=1000)
     p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0)

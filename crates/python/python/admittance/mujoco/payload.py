@@ -99,10 +99,16 @@ def urdf_with_payload(text, tip_link, payload):
 
 def false_torque(ident, cond, cfg):
     """Rms over joints and samples (after the warm-up) of the conditioned torque minus what
-    ``ident`` predicts from the conditioned motion (N m)."""
+    ``ident`` predicts from the conditioned motion (N m), each joint's torque paired with the
+    motion as the identification was fitted (its ``delay_s``: the torque that much later)."""
     start = int(round(cfg.warmup / cfg.dt))
+    tau = np.asarray(cond["tau"], dtype=float)
+    k = np.arange(len(tau), dtype=float)
+    for i, d in enumerate(ident.summary.get("delay_s") or []):
+        if d:
+            tau[:, i] = np.interp(np.clip(k + d / cfg.dt, 0, len(tau) - 1), k, tau[:, i])
     predicted = np.asarray(ident.predict(cond["q"][start:], cond["qdot"][start:], cond["qddot"][start:]))
-    return float(np.sqrt(np.mean((cond["tau"][start:] - predicted) ** 2)))
+    return float(np.sqrt(np.mean((tau[start:] - predicted) ** 2)))
 
 
 def run_payload(cfg: PayloadConfig, robots=None, log=print):
