@@ -75,14 +75,18 @@ impl InputDelay {
         }))
     }
 
-    /// Pushes this period's inputs and returns them delayed, as `[q, q', q'', tau]`.
+    /// Pushes this period's inputs (`n` values each) and returns them delayed, as
+    /// `[q, q', q'', tau]`.
     pub fn update(&mut self, q: &[f64], qdot: &[f64], qddot: &[f64], tau: &[f64]) -> &[f64] {
         let width = self.out.len();
         let n = width / 4;
         self.head = (self.head + 1) % self.depth;
         let row = &mut self.ring[self.head * width..(self.head + 1) * width];
+        // Slices shorter than the joint count leave the rest as it was (never a panic).
         for (part, values) in [q, qdot, qddot, tau].iter().enumerate() {
-            row[part * n..(part + 1) * n].copy_from_slice(&values[..n]);
+            for (slot, v) in row[part * n..(part + 1) * n].iter_mut().zip(values.iter()) {
+                *slot = *v;
+            }
         }
         self.filled = (self.filled + 1).min(self.depth);
         let oldest = (self.filled - 1) as f64;
