@@ -27,22 +27,7 @@ fn text(o: &Output) -> String {
 /// Free motion of the Baxter model (multi-sine, 200 Hz) with viscous friction and white
 /// torque noise of 0.3 N m (what no identification fits), as a CSV.
 fn free_motion_csv(dir: &Path, seed: f64, seconds: f64) -> PathBuf {
-    use admittance_dynamics::{rnea, Data, Model};
-    let model = Model::from_urdf_file(
-        &root().join("models/baxter_left_arm.urdf"),
-        Some("base"),
-        Some("left_hand"),
-    )
-    .unwrap();
-    let names: Vec<String> = model.joint_names().map(String::from).collect();
-    let mut csv = String::from("t");
-    for s in ["q", "qdot", "qddot", "tau"] {
-        for j in &names {
-            csv += &format!(",{s}.{j}");
-        }
-    }
-    csv.push('\n');
-    let mut data = Data::new(&model);
+    let names = crate::free_motion::names(&crate::free_motion::baxter());
     let mut state = (seed * 1e6) as u64 | 1;
     let mut uniform = move || {
         state = state
@@ -50,36 +35,17 @@ fn free_motion_csv(dir: &Path, seed: f64, seconds: f64) -> PathBuf {
             .wrapping_add(1442695040888963407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    for k in 0..(seconds * 200.0) as usize {
-        let t = k as f64 / 200.0;
-        let (mut q, mut qd, mut qdd) = (vec![0.0; 7], vec![0.0; 7], vec![0.0; 7]);
-        for i in 0..7 {
-            for h in 1..=3 {
-                let w = 2.0
-                    * std::f64::consts::PI
-                    * (0.11 * h as f64 + 0.03 * i as f64)
-                    * (1.0 + 0.2 * seed);
-                let (a, ph) = (0.5 / h as f64, seed * (1 + i + h) as f64);
-                q[i] += a * (w * t + ph).sin();
-                qd[i] += a * w * (w * t + ph).cos();
-                qdd[i] -= a * w * w * (w * t + ph).sin();
-            }
-        }
-        let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
-        csv += &format!("{t}");
-        for v in q.iter().chain(&qd).chain(&qdd) {
-            csv += &format!(",{v}");
-        }
-        for i in 0..7 {
+    crate::free_motion::multisine_csv(
+        dir.join(format!("free_{seed}.csv")),
+        seed,
+        seconds,
+        &names,
+        |_, i, qd| {
             // Irwin-Hall: the sum of 12 uniforms less 6 is close to a unit normal.
             let noise = (0..12).map(|_| uniform()).sum::<f64>() - 6.0;
-            csv += &format!(",{}", tau[i] + 1.5 * qd[i] + 0.3 * noise);
-        }
-        csv.push('\n');
-    }
-    let path = dir.join(format!("free_{seed}.csv"));
-    std::fs::write(&path, csv).unwrap();
-    path
+            1.5 * qd[i] + 0.3 * noise
+        },
+    )
 }
 
 #[test]

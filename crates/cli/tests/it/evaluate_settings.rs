@@ -49,58 +49,17 @@ fn rms(table: &str, name: &str) -> f64 {
 /// Free motion of the Baxter model with friction it does not know and sensor noise, as a
 /// CSV whose columns name the joints `names` (the Baxter's, or another arm's of 7 joints).
 fn free_motion_csv(dir: &Path, seed: f64, seconds: f64, names: &[String]) -> PathBuf {
-    use admittance_dynamics::{rnea, Data};
-    let model = baxter();
-    let mut csv = String::from("t");
-    for s in ["q", "qdot", "qddot", "tau"] {
-        for j in names {
-            csv += &format!(",{s}.{j}");
-        }
-    }
-    csv.push('\n');
-    let mut data = Data::new(&model);
-    for k in 0..(seconds * 200.0) as usize {
-        let t = k as f64 / 200.0;
-        let (mut q, mut qd, mut qdd) = (vec![0.0; 7], vec![0.0; 7], vec![0.0; 7]);
-        for i in 0..7 {
-            for h in 1..=3 {
-                let w = 2.0
-                    * std::f64::consts::PI
-                    * (0.11 * h as f64 + 0.03 * i as f64)
-                    * (1.0 + 0.2 * seed);
-                let (a, ph) = (0.5 / h as f64, seed * (1 + i + h) as f64);
-                q[i] += a * (w * t + ph).sin();
-                qd[i] += a * w * (w * t + ph).cos();
-                qdd[i] -= a * w * w * (w * t + ph).sin();
-            }
-        }
-        let tau = rnea(&model, &mut data, &q, &qd, &qdd).unwrap().clone();
-        csv += &format!("{t}");
-        for v in q.iter().chain(&qd).chain(&qdd) {
-            csv += &format!(",{v}");
-        }
-        for i in 0..7 {
+    crate::free_motion::multisine_csv(
+        dir.join(format!("free_{seed}_{}.csv", names[0])),
+        seed,
+        seconds,
+        names,
+        |k, i, qd| {
             // Deterministic "noise": what no model of q, q', q'' explains.
             let noise = 0.3 * ((k * (i + 3)) as f64 * 1.618).sin();
-            csv += &format!(
-                ",{}",
-                tau[i] + 1.5 * qd[i] + 0.8 * (qd[i] / 0.01).tanh() + noise
-            );
-        }
-        csv.push('\n');
-    }
-    let path = dir.join(format!("free_{seed}_{}.csv", names[0]));
-    std::fs::write(&path, csv).unwrap();
-    path
-}
-
-fn baxter() -> admittance_dynamics::Model {
-    admittance_dynamics::Model::from_urdf_file(
-        &root().join("models/baxter_left_arm.urdf"),
-        Some("base"),
-        Some("left_hand"),
+            1.5 * qd[i] + 0.8 * (qd[i] / 0.01).tanh() + noise
+        },
     )
-    .unwrap()
 }
 
 fn joints(urdf: &str) -> Vec<String> {
@@ -122,7 +81,10 @@ struct Files {
 /// Two recordings and a 10 Hz identification of the first.
 fn files() -> Files {
     let dir = tempfile::tempdir().unwrap();
-    let names: Vec<String> = baxter().joint_names().map(String::from).collect();
+    let names: Vec<String> = crate::free_motion::baxter()
+        .joint_names()
+        .map(String::from)
+        .collect();
     let train = free_motion_csv(dir.path(), 0.3, 30.0, &names);
     let other = free_motion_csv(dir.path(), 1.9, 12.0, &names);
     let urdf = root().join("models/baxter_left_arm.urdf");

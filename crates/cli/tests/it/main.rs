@@ -7,6 +7,7 @@ mod deploy_cli;
 mod dynamics_cli;
 mod evaluate_settings;
 mod excite_cli;
+mod free_motion;
 mod gains_health_cli;
 mod identify_cli;
 mod import_cli;
