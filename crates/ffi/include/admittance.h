@@ -97,6 +97,11 @@
 // `AdmOutput::flags`: the contact detector sees a collision (the upper level).
 #define ADM_OUT_COLLISION (1 << 10)
 
+// `AdmOutput::flags`: some joint's angle is a reading repeated while the joint was moving
+// (a driver repeating its last packet, a frozen encoder), from its first stale sample; the
+// controller's safe hold (`ADM_FAULT_STALE_MEASUREMENT`) follows if it lasts.
+#define ADM_OUT_STALE_INPUT (1 << 11)
+
 // `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 // 1 us more per step on a 7-joint arm.
 #define ADM_CONFIG_WRENCH 1

@@ -77,6 +77,10 @@ pub const ADM_OUT_HOLDING_POSE: u32 = 1 << 8;
 pub const ADM_OUT_CONTACT: u32 = 1 << 9;
 /// `AdmOutput::flags`: the contact detector sees a collision (the upper level).
 pub const ADM_OUT_COLLISION: u32 = 1 << 10;
+/// `AdmOutput::flags`: some joint's angle is a reading repeated while the joint was moving
+/// (a driver repeating its last packet, a frozen encoder), from its first stale sample; the
+/// controller's safe hold (`ADM_FAULT_STALE_MEASUREMENT`) follows if it lasts.
+pub const ADM_OUT_STALE_INPUT: u32 = 1 << 11;
 
 /// `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 /// 1 us more per step on a 7-joint arm.

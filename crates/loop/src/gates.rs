@@ -6,7 +6,8 @@
 //! * **angle**: outside `[lower - margin, upper + margin]` of the URDF's limits;
 //! * **jump**: farther from the last accepted angle than `jump_factor x velocity limit x
 //!   elapsed time` (no motor moves faster than its velocity limit; the elapsed time since the
-//!   last accepted sample, so that a dropout does not lock the gate);
+//!   last accepted sample, so that a dropout does not lock the gate, and since that angle
+//!   was first read, so that a driver repeating its last packet does not trip it);
 //! * **torque**: `|tau| > torque_factor x effort limit`.
 //!
 //! A joint without a limit (infinite or zero in the URDF) is not gated on it. A rejected
@@ -186,6 +187,10 @@ impl PlausibilityGates {
                     q[i] = f64::NAN;
                     first = first.or(Some(GateFault { joint: i, gate }));
                 }
+                // A repeated reading is no news of when the angle was: a driver that repeats
+                // its last packet (issue 34) would otherwise make the jump after it look
+                // like one period's.
+                None if v == self.last_q[i] => {}
                 None => {
                     self.last_q[i] = v;
                     self.last_time[i] = time;

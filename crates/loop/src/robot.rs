@@ -64,6 +64,12 @@ pub struct RobotStatus {
     pub warmup: bool,
     /// The desired motion is the hold of the first measured pose (no `desired` given).
     pub holding_pose: bool,
+    /// Some joint's angle is a reading repeated while the joint was moving (a driver
+    /// dropping packets and repeating the last one, or a frozen encoder; the signal chain's
+    /// detection, issue 34): its sample time lies more than half a period back. Reported
+    /// from the first stale sample, long before the controller's safe hold
+    /// (`stale_steps`) acts.
+    pub stale_input: bool,
     /// Contact flags (issue 31), with a contact floor.
     pub contact: Option<ContactState>,
 }
@@ -250,6 +256,13 @@ impl RobotLoop {
         // The filters see every sample (a NaN is held), so that they are started when the
         // last joint delivers.
         let _ = self.chain.sample(input.time, &self.q_in, &self.tau_in);
+        let half_period = 0.5 * self.chain.dt();
+        let stale_input = self
+            .chain
+            .measurement()
+            .sample_time
+            .iter()
+            .any(|&t| input.time - t > half_period);
         let mut status = RobotStatus {
             controller_fault: None,
             observer_fault: false,
@@ -258,6 +271,7 @@ impl RobotLoop {
             waiting_for_angles: waiting,
             warmup: input.time < self.warmup,
             holding_pose: input.desired.is_none(),
+            stale_input,
             contact: self.contact.as_ref().map(|c| c.state()),
         };
         if waiting {

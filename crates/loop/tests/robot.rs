@@ -292,3 +292,41 @@ fn the_identifications_torque_delay_is_applied_at_run_time() {
         "false torque {with} with the delay, {without} without"
     );
 }
+
+#[test]
+fn a_repeated_reading_of_a_moving_joint_is_reported_from_its_first_stale_sample() {
+    // The driver repeats joint 2's last packet for 15 ms while the arm moves: the status
+    // says so from the signal chain's first stale sample (10 ms), before the safe hold's
+    // 30 steps would act, and not when the readings move again.
+    let model = model();
+    let mut l = robot_loop(&[]);
+    let mut data = Data::new(&model);
+    let mut frozen_q = 0.0;
+    let mut flagged = Vec::new();
+    for k in 0..600 {
+        let (mut q, tau) = motion(&model, &mut data, k);
+        // Joint 2 faster (about 0.5 rad/s at the freeze): a joint that slow cannot stop
+        // within a period, so a repeated reading is not a reversal.
+        q[2] = POSE[2] + 0.5 * (3.0 * k as f64 * 1e-3).sin();
+        if (400..415).contains(&k) {
+            if k == 400 {
+                frozen_q = q[2];
+            }
+            q[2] = frozen_q;
+        }
+        let s = step_measured(&mut l, k, &q, &tau);
+        if s.stale_input {
+            flagged.push(k);
+        }
+        assert!(
+            s.controller_fault.is_none(),
+            "step {k}: {:?}",
+            s.controller_fault
+        );
+    }
+    assert!(!flagged.is_empty(), "never flagged");
+    assert!(
+        flagged.iter().all(|k| (405..415).contains(k)),
+        "{flagged:?}"
+    );
+}

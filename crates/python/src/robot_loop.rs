@@ -117,7 +117,7 @@ impl PyRobotLoop {
 
     /// What the last step saw: `ok`, `controller_fault` (text or None), `observer_fault`,
     /// `nonfinite_input`, `implausible` (None or `(joint, "angle" | "jump" | "torque")`),
-    /// `waiting_for_angles`, `warmup`, `holding_pose`, `contact` (None or a dict of
+    /// `waiting_for_angles`, `warmup`, `holding_pose`, `stale_input`, `contact` (None or a dict of
     /// `contact`, `collision`, `link`); None before the first step.
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
@@ -146,6 +146,7 @@ impl PyRobotLoop {
         d.set_item("waiting_for_angles", s.waiting_for_angles)?;
         d.set_item("warmup", s.warmup)?;
         d.set_item("holding_pose", s.holding_pose)?;
+        d.set_item("stale_input", s.stale_input)?;
         match s.contact {
             Some(c) => {
                 let cd = PyDict::new(py);
