@@ -77,9 +77,9 @@ fn shift_grid(rate_hz: Option<f64>) -> Vec<f64> {
 }
 /// Ridge of the plain solves that choose the delay.
 const DELAY_RIDGE: f64 = 1e-3;
-/// Share of the held-out error a delay must remove to be kept. A delay that matters
-/// explains far more (a 20 ms lag of the torques is most of the false torque); smaller
-/// gains are model error that a shift happens to mimic on that motion: on simulated arms
+/// Share of the held-out error a delay must remove to be kept. Smaller gains are model
+/// error that a shift happens to mimic on that motion (a delay worth applying removes
+/// more): on simulated arms
 /// whose true delay is zero, 5 ms removed 4 % of a validation recording's error on the UR5,
 /// and on other motion the momentum observer raised 142 false contact events in 10 min
 /// instead of 16.
