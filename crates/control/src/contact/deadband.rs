@@ -1,5 +1,7 @@
 //! The admittance's deadband on the estimate (issue 31, item 3).
 
+use crate::error::ConfigError;
+
 /// The knee of [`soft_deadband`] as a fraction of the deadband.
 pub const DEADBAND_KNEE: f64 = 0.5;
 
@@ -24,4 +26,29 @@ pub fn soft_deadband(e: f64, d: f64) -> f64 {
         x - 0.5 * w
     };
     y.copysign(e)
+}
+
+/// A per-joint deadband checked for `n` joints (one finite value >= 0 each), as the
+/// admittance models keep it: empty when every value is 0 (no deadband).
+pub(crate) fn checked_deadband(deadband: &[f64], n: usize) -> Result<Vec<f64>, ConfigError> {
+    if deadband.len() != n {
+        return Err(ConfigError::new(
+            "deadband",
+            format!(
+                "has {} values for {n} joints: give one per joint",
+                deadband.len()
+            ),
+        ));
+    }
+    if let Some(i) = deadband.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
+        return Err(ConfigError::new(
+            format!("deadband[{i}]"),
+            format!("is {}: must be finite and >= 0 (N m)", deadband[i]),
+        ));
+    }
+    Ok(if deadband.iter().all(|d| *d == 0.0) {
+        Vec::new()
+    } else {
+        deadband.to_vec()
+    })
 }

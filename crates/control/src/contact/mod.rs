@@ -24,6 +24,7 @@ mod floor;
 mod tail;
 
 pub use calibrate::{calibrate_contact, calibrate_contact_with, ContactCalibrationConfig};
+pub(crate) use deadband::checked_deadband;
 pub use deadband::{soft_deadband, DEADBAND_KNEE};
 pub use detector::{ContactDetector, ContactState};
 pub use file::{CONTACT_FLOOR_FORMAT, CONTACT_FLOOR_FORMAT_VERSION};

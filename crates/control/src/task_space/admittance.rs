@@ -228,27 +228,7 @@ impl TaskSpaceAdmittance {
     /// The same admittance with a deadband on the joint-torque estimate per joint (N m),
     /// applied before the wrench is estimated: see [`crate::Admittance::with_deadband`].
     pub fn with_deadband(mut self, deadband: &[f64]) -> Result<Self, ConfigError> {
-        if deadband.len() != self.n {
-            return Err(ConfigError::new(
-                "deadband",
-                format!(
-                    "has {} values for {} joints: give one per joint",
-                    deadband.len(),
-                    self.n
-                ),
-            ));
-        }
-        if let Some(i) = deadband.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
-            return Err(ConfigError::new(
-                format!("deadband[{i}]"),
-                format!("is {}: must be finite and >= 0 (N m)", deadband[i]),
-            ));
-        }
-        self.deadband = if deadband.iter().all(|d| *d == 0.0) {
-            Vec::new()
-        } else {
-            deadband.to_vec()
-        };
+        self.deadband = crate::contact::checked_deadband(deadband, self.n)?;
         Ok(self)
     }
 
