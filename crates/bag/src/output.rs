@@ -70,8 +70,8 @@ fn header(table: &Table) -> Vec<String> {
     header
 }
 
-/// The names must make an honest CSV header: no comma, quote or line break (they would
-/// split or shift the columns), not empty, no two alike.
+/// The names must make an honest CSV header: no comma, quote, line break or other control
+/// character (they would split, shift or hide the columns), not empty, no two alike.
 pub fn check_columns(bag: &Path, table: &Table) -> Result<(), BagError> {
     let bad = |message: String| BagError::Data {
         bag: bag.to_path_buf(),
@@ -79,9 +79,13 @@ pub fn check_columns(bag: &Path, table: &Table) -> Result<(), BagError> {
     };
     let label = table.label.iter().flat_map(|(c, _)| c.iter());
     for name in table.joints.iter().chain(label) {
-        if name.is_empty() || name.contains([',', '"', '\n', '\r']) || name.trim() != name {
+        if name.is_empty()
+            || name.contains([',', '"'])
+            || name.chars().any(char::is_control)
+            || name.trim() != name
+        {
             return Err(bad(format!(
-                "joint or label name {name:?} cannot be a CSV column name (empty, or a comma, quote, line break or outer space): rename it in the profile's `joints`"
+                "joint or label name {name:?} cannot be a CSV column name (empty, or a comma, quote, line break, control character or outer space): rename it in the profile's `joints`"
             )));
         }
     }

@@ -243,7 +243,7 @@ fn csv_refuses_duplicate_and_malformed_names_and_overflowing_values() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("joint `j0` appears twice"), "{e}");
-    for bad in ["j,1", "j\n1", "j\"1"] {
+    for bad in ["j,1", "j\n1", "j\"1", "j\u{0}1", "j\t1"] {
         let bag = js_bag(dir.path(), &every_ms(20), |_, js| js.name[1] = bad.into());
         // The table itself is fine (Python takes it); the CSV is refused.
         assert!(import(&bag, &js_profile(true), &opts(false)).is_ok());

@@ -48,6 +48,13 @@ pub fn deploy(args: &DeployArgs) -> Result<(), CliError> {
     };
     let mut source =
         ScenarioSource::load(&scenario_path).map_err(|e| CliError::input(e.to_string()))?;
+    // A run folder's scenario.toml keeps the file's relative paths: they are relative to
+    // the scenario file the run was made from, which summary.json names.
+    let scenario_path = if args.source.is_dir() {
+        run_scenario_file(&args.source).unwrap_or(scenario_path)
+    } else {
+        scenario_path
+    };
     for s in &args.set {
         source.set(s).map_err(|e| CliError::input(e.to_string()))?;
     }
@@ -110,7 +117,18 @@ fn folder_files(
     observer.remove("network");
     let c = &parts.loop_config.observer;
     if let Some(ident) = &c.identification {
-        files.push(("identification.json".into(), read(ident)?));
+        let bytes = read(ident)?;
+        if let Some(fitted) = fitted_filter_hz(&bytes) {
+            if fitted.to_bits() != c.input_filter_hz.to_bits() {
+                return Err(bad(format!(
+                    "observer.input_filter_hz is {} Hz, but {} was fitted on signals conditioned at {fitted} Hz: \
+                     the robot's observer would run it on other signals; set observer.input_filter_hz = {fitted}",
+                    c.input_filter_hz,
+                    ident.display()
+                )));
+            }
+        }
+        files.push(("identification.json".into(), bytes));
         observer.insert("identification".into(), "identification.json".into());
         made_by["identification"] = json!(ident.display().to_string());
     }
@@ -160,10 +178,12 @@ fn folder_files(
         parts.scenario.plant.sensors.filter_cutoff_hz.into(),
     );
     table.insert("signals".into(), signals.into());
-    if let Some(floor) = &args.contact_floor {
-        files.push(("contact_floor.json".into(), read(floor)?));
+    if let Some(floor) = contact_floor_file(args, &scenario_path, &parts.scenario)? {
+        files.push(("contact_floor.json".into(), read(&floor)?));
         let mut contact = toml::Table::new();
         contact.insert("floor".into(), "contact_floor.json".into());
+        let deadband = parts.scenario.contact.as_ref().is_some_and(|c| c.deadband);
+        contact.insert("deadband".into(), deadband.into());
         table.insert("contact".into(), contact.into());
         made_by["contact_floor"] = json!(floor.display().to_string());
     }
@@ -177,4 +197,65 @@ fn folder_files(
     );
     files.insert(0, (LOOP_FILE.to_string(), (header + &text).into_bytes()));
     Ok((files, made_by))
+}
+
+/// The contact floor to deploy: `--contact-floor`, else the scenario's `[contact] floor`,
+/// else, for a run folder, the floor its variant detected with. A scenario that calibrates
+/// its floor at run time is deployed from its run folder (deploy never calibrates).
+fn contact_floor_file(
+    args: &DeployArgs,
+    scenario_path: &Path,
+    scenario: &admittance_scenario::Scenario,
+) -> Result<Option<PathBuf>, CliError> {
+    if let Some(f) = &args.contact_floor {
+        return Ok(Some(f.clone()));
+    }
+    let Some(spec) = &scenario.contact else {
+        return Ok(None);
+    };
+    if let Some(f) = &spec.floor {
+        let dir = scenario_path.parent().unwrap_or(Path::new("."));
+        return Ok(Some(if f.is_absolute() {
+            f.clone()
+        } else {
+            dir.join(f)
+        }));
+    }
+    let variant = args.variant.as_deref().unwrap_or("base");
+    let in_run = args
+        .source
+        .join(admittance_runfolder::files::contact_floor(variant));
+    if args.source.is_dir() && in_run.is_file() {
+        return Ok(Some(in_run));
+    }
+    Err(CliError::input(format!(
+        "{}: [contact] calibrates its floor when the scenario runs, and deploy never calibrates: \
+         run it (admittance run {} --out RUN_DIR) and deploy RUN_DIR, or give --contact-floor FILE",
+        scenario_path.display(),
+        scenario_path.display()
+    )))
+}
+
+/// The input cut-off an identification file was fitted at: its summary's, else the one
+/// `admittance identify` or a scenario's training recorded beside it; `None` when unknown.
+fn fitted_filter_hz(bytes: &[u8]) -> Option<f64> {
+    let v: serde_json::Value = serde_json::from_slice(bytes).ok()?;
+    let summary = v.pointer("/payload/summary/input_filter_hz")?.as_f64()?;
+    if summary > 0.0 {
+        return Some(summary);
+    }
+    v.pointer("/payload/data/input_filter_hz")?.as_f64()
+}
+
+/// The scenario file a run folder was made from (`summary.json`'s `scenario_file`), when it
+/// names one that exists.
+fn run_scenario_file(run_dir: &Path) -> Option<PathBuf> {
+    let summary = run_dir.join(admittance_runfolder::files::SUMMARY);
+    let bytes = admittance_files::read_regular(&summary, admittance_files::TEXT_LIMIT).ok()?;
+    let v: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
+    let file = PathBuf::from(
+        v.get(admittance_runfolder::summary::KEY_SCENARIO_FILE)?
+            .as_str()?,
+    );
+    file.is_file().then_some(file)
 }

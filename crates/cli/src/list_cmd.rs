@@ -16,7 +16,8 @@ pub struct ListArgs {
 
 /// One line of the listing: file name, scenario name, description (or what is wrong).
 fn describe(path: &std::path::Path) -> Result<(String, String), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("unreadable: {e}"))?;
+    let text = admittance_files::read_regular_text(path, admittance_files::TEXT_LIMIT)
+        .map_err(|e| format!("unreadable: {e}"))?;
     let table: toml::Table = text
         .parse()
         .map_err(|e: toml::de::Error| format!("not valid TOML: {}", e.message()))?;

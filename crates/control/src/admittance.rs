@@ -323,8 +323,14 @@ impl Admittance {
     /// the smooth knee of [`soft_deadband`](crate::soft_deadband). Values of 0 leave a joint
     /// as without a deadband (the default).
     pub fn with_deadband(mut self, deadband: &[f64]) -> Result<Self, ConfigError> {
-        self.deadband = crate::contact::checked_deadband(deadband, self.n)?;
+        self.set_deadband(deadband)?;
         Ok(self)
+    }
+
+    /// Sets the deadband in place (see `with_deadband`); on an error nothing changes.
+    pub fn set_deadband(&mut self, deadband: &[f64]) -> Result<(), ConfigError> {
+        self.deadband = crate::contact::checked_deadband(deadband, self.n)?;
+        Ok(())
     }
 
     /// The deadband per joint (empty when there is none).

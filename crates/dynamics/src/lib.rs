@@ -47,7 +47,8 @@ pub use algorithms::regressor::{
     inertial_parameters, joint_torque_regressor, with_inertial_parameters, PARAMETERS_PER_BODY,
 };
 pub use algorithms::rnea::{
-    gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea, rnea_with_tip_wrench,
+    bias_and_gravity, gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea,
+    rnea_with_tip_wrench,
 };
 pub use data::Data;
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};

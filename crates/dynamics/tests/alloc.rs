@@ -27,6 +27,8 @@ fn no_algorithm_allocates_after_construction() {
         momentum_observer_terms(&model, data, &q, &v).unwrap();
         gravity_torque(&model, data, &q).unwrap();
         nonlinear_effects(&model, data, &q, &v).unwrap();
+        mass_matrix_and_bias(&model, data, &q, &v, true).unwrap();
+        bias_and_gravity(&model, data, &q, &v, true).unwrap();
         aba(&model, data, &q, &v, &a).unwrap();
         aba_with_tip_wrench(&model, data, &q, &v, &a, &w).unwrap();
         forward_kinematics(&model, data, &q).unwrap();

@@ -11,7 +11,7 @@
 
 // Version of this ABI: bumped whenever a struct, a constant or a function changes.
 // `AdmConfig::abi_version` must equal it.
-#define ADM_ABI_VERSION 2
+#define ADM_ABI_VERSION 3
 
 // Capacity of every joint array (a chain may have fewer joints, never more).
 #define ADM_MAX_JOINTS 16
@@ -241,6 +241,14 @@ typedef struct AdmOutput {
   // mounted at the tip would report (ros2_control's `ft_sensor`, `ft_sensor.frame.id` =
   // the tip link).
   double wrench_tip[6];
+  // With `ADM_OUT_CONTACT`: the wrench the environment applies at the touched link (the
+  // origin of joint `contact_link`'s child link), from the estimate of that joint and
+  // the ones before it (a force on a link loads those only), in the `[arm] base` axes:
+  // force x, y, z (N), moment x, y, z (N m); with fewer than six joints before the link,
+  // the smallest wrench that explains their estimate. Zero without a contact.
+  double contact_wrench[6];
+  // The same wrench in the touched link's axes.
+  double contact_wrench_link[6];
 } AdmOutput;
 
 #ifdef __cplusplus

@@ -10,7 +10,7 @@ use std::os::raw::c_char;
 
 /// Version of this ABI: bumped whenever a struct, a constant or a function changes.
 /// `AdmConfig::abi_version` must equal it.
-pub const ADM_ABI_VERSION: u32 = 2;
+pub const ADM_ABI_VERSION: u32 = 3;
 
 /// Capacity of every joint array (a chain may have fewer joints, never more).
 pub const ADM_MAX_JOINTS: usize = 16;
@@ -213,6 +213,14 @@ pub struct AdmOutput {
     /// mounted at the tip would report (ros2_control's `ft_sensor`, `ft_sensor.frame.id` =
     /// the tip link).
     pub wrench_tip: [f64; 6],
+    /// With `ADM_OUT_CONTACT`: the wrench the environment applies at the touched link (the
+    /// origin of joint `contact_link`'s child link), from the estimate of that joint and
+    /// the ones before it (a force on a link loads those only), in the `[arm] base` axes:
+    /// force x, y, z (N), moment x, y, z (N m); with fewer than six joints before the link,
+    /// the smallest wrench that explains their estimate. Zero without a contact.
+    pub contact_wrench: [f64; 6],
+    /// The same wrench in the touched link's axes.
+    pub contact_wrench_link: [f64; 6],
 }
 
 impl AdmOutput {
@@ -234,6 +242,8 @@ impl AdmOutput {
         qddot_r: [0.0; ADM_MAX_JOINTS],
         wrench: [0.0; 6],
         wrench_tip: [0.0; 6],
+        contact_wrench: [0.0; 6],
+        contact_wrench_link: [0.0; 6],
     };
 }
 
@@ -254,4 +264,4 @@ impl AdmInput {
 
 // No padding anywhere: the sizes are the sums of the fields.
 const _: () = assert!(std::mem::size_of::<AdmInput>() == 16 + 6 * 8 * ADM_MAX_JOINTS);
-const _: () = assert!(std::mem::size_of::<AdmOutput>() == 48 + 5 * 8 * ADM_MAX_JOINTS + 96);
+const _: () = assert!(std::mem::size_of::<AdmOutput>() == 48 + 5 * 8 * ADM_MAX_JOINTS + 4 * 48);

@@ -104,5 +104,9 @@ pub fn output_of(loop_: &RobotLoop, report: &StepReport, time: f64, step: u64) -
         out.wrench.copy_from_slice(base);
         out.wrench_tip.copy_from_slice(tip);
     }
+    if let Some((base, link)) = loop_.contact_wrench() {
+        out.contact_wrench.copy_from_slice(base);
+        out.contact_wrench_link.copy_from_slice(link);
+    }
     out
 }

@@ -217,6 +217,11 @@ impl ClosedLoop {
         self.admittance.as_ref()
     }
 
+    /// The admittance model, mutable (a deadband set after construction).
+    pub fn admittance_mut(&mut self) -> Option<&mut Compliance> {
+        self.admittance.as_mut()
+    }
+
     /// The neural controller, if that is the controller.
     pub fn neural(&self) -> Option<&NeuralController> {
         match &self.controller {

@@ -91,7 +91,14 @@ pub enum Implausible {
     Jump,
     /// The torque exceeds the multiple of the effort limit.
     Torque,
+    /// A measured velocity exceeds the multiple of the velocity limit (the jump gate's
+    /// speed; [`MEASURED_SPEED_BOUND`] for a joint without one).
+    Velocity,
 }
+
+/// The largest measured joint speed accepted for a joint whose URDF gives no velocity limit
+/// (rad/s or m/s): no motor turns a joint at 1000 rad/s.
+pub const MEASURED_SPEED_BOUND: f64 = 1000.0;
 
 /// The first refused value of a sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -209,6 +216,34 @@ impl PlausibilityGates {
             }
         }
         if first.is_some() {
+            self.faults += 1;
+        }
+        first
+    }
+
+    /// Checks measured velocities (a robot that reports them): every value beyond its
+    /// joint's speed bound is replaced by NaN in place; returns the first refusal. A sample
+    /// is counted once, with `counted` when [`Self::check`] already refused a value of it.
+    pub fn check_velocity(&mut self, qdot: &mut [f64], counted: bool) -> Option<GateFault> {
+        if !self.enabled {
+            return None;
+        }
+        let mut first = None;
+        for (i, v) in qdot.iter_mut().enumerate().take(self.max_speed.len()) {
+            let bound = if self.max_speed[i].is_finite() {
+                self.max_speed[i]
+            } else {
+                MEASURED_SPEED_BOUND
+            };
+            if v.is_finite() && v.abs() > bound {
+                *v = f64::NAN;
+                first = first.or(Some(GateFault {
+                    joint: i,
+                    gate: Implausible::Velocity,
+                }));
+            }
+        }
+        if first.is_some() && !counted {
             self.faults += 1;
         }
         first

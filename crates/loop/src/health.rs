@@ -118,7 +118,10 @@ impl HealthMonitor {
                     qdot[i], self.speed_bound[i]
                 ));
             }
-            if !(m.q[i].abs() <= MAX_ANGLE) && !m.injected_nan[i] {
+            // A NaN reading (injected, or refused by the plausibility gates) takes the
+            // loop's fault path (a safe hold, counted); only a finite or infinite value
+            // beyond the bound says the sensors' settings are wrong.
+            if !(m.q[i].abs() <= MAX_ANGLE) && !m.q[i].is_nan() {
                 return Some(format!(
                     "the encoder reading of {name} is {:.3e} rad (check plant.sensors: its noise or resolution)",
                     m.q[i]

@@ -2,8 +2,8 @@
 //! or task space) and the source of its external-torque estimate.
 
 use admittance_control::{
-    Admittance, CompliantReference, Controller, NeuralController, ReferenceInput, Saturation,
-    StepStatus, TaskSpaceAdmittance,
+    Admittance, CompliantReference, ConfigError, Controller, NeuralController, ReferenceInput,
+    Saturation, StepStatus, TaskSpaceAdmittance,
 };
 
 use crate::stage::ObserverStage;
@@ -63,6 +63,16 @@ impl Compliance {
     /// The reference saturation (eq. 7), if any.
     pub fn saturation(&self) -> Option<&Saturation> {
         self.as_dyn().saturation()
+    }
+
+    /// Sets a deadband on the estimate per joint (N m), e.g. a contact floor's contact
+    /// thresholds (issue 31: an untouched arm does not drift); see
+    /// [`Admittance::with_deadband`].
+    pub fn set_deadband(&mut self, deadband: &[f64]) -> Result<(), ConfigError> {
+        match self {
+            Compliance::Joint(a) => a.set_deadband(deadband),
+            Compliance::Task(a) => a.set_deadband(deadband),
+        }
     }
 
     /// The task-space model, if that is the kind.

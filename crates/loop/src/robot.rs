@@ -95,6 +95,7 @@ pub struct RobotLoop {
     gates: PlausibilityGates,
     warmup: f64,
     q_in: Vec<f64>,
+    qdot_in: Vec<f64>,
     tau_in: Vec<f64>,
     desired: [Vec<f64>; 3],
     hold: Vec<f64>,
@@ -105,6 +106,9 @@ pub struct RobotLoop {
     zeros: Vec<f64>,
     wrench: Option<WrenchEstimator>,
     contact: Option<ContactDetector>,
+    /// With the contact detector: the wrench at the touched link, and each joint's child
+    /// link frame.
+    contact_wrench: Option<(WrenchEstimator, Vec<usize>)>,
 }
 
 impl RobotLoop {
@@ -130,7 +134,7 @@ impl RobotLoop {
             .hint("choose momentum, learned, hybrid or none"));
         }
         let loop_config = config.loop_config(folder);
-        let closed_loop = ClosedLoop::from_config(&model, &loop_config, trained)?;
+        let mut closed_loop = ClosedLoop::from_config(&model, &loop_config, trained)?;
         let n = model.nq();
         let rate = config.control_rate_hz;
         let chain = SignalChain::new(n, config.signals.filter_cutoff_hz, rate)
@@ -158,6 +162,33 @@ impl RobotLoop {
                 })
             })
             .transpose()?;
+        if let (Some(det), true) = (
+            &contact,
+            config.contact.as_ref().is_some_and(|c| c.deadband),
+        ) {
+            let Some(compliance) = closed_loop.admittance_mut() else {
+                return Err(LoopError::invalid(
+                    "contact.deadband",
+                    "needs an [admittance] or [task_admittance] table",
+                ));
+            };
+            compliance
+                .set_deadband(&det.floor().contact_thresholds)
+                .map_err(|e| LoopError::Component {
+                    section: "contact.deadband".into(),
+                    source: e,
+                })?;
+        }
+        let contact_wrench = match &contact {
+            Some(_) => Some((
+                WrenchEstimator::new(&model, 0.0).map_err(|e| LoopError::Component {
+                    section: "contact".into(),
+                    source: e,
+                })?,
+                link_frames(&model),
+            )),
+            None => None,
+        };
         let warmup = match config.observer.kind {
             ObserverKind::None | ObserverKind::Oracle => 0.0,
             _ => config.observer.warmup,
@@ -171,6 +202,7 @@ impl RobotLoop {
             gates,
             warmup,
             q_in: vec![0.0; n],
+            qdot_in: vec![0.0; n],
             tau_in: vec![0.0; n],
             desired: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
             hold: vec![0.0; n],
@@ -181,6 +213,7 @@ impl RobotLoop {
             zeros: vec![0.0; n],
             wrench: None,
             contact,
+            contact_wrench,
         })
     }
 
@@ -289,7 +322,19 @@ impl RobotLoop {
         }
         if let Some(qdot) = input.qdot {
             status.nonfinite_input |= !finite(qdot);
-            copy(&mut self.chain.measurement_mut().qdot, qdot);
+            self.qdot_in.fill(f64::NAN);
+            copy(&mut self.qdot_in, qdot);
+            let refused = self
+                .gates
+                .check_velocity(&mut self.qdot_in, status.implausible.is_some());
+            status.implausible = status.implausible.or(refused);
+            // A refused velocity leaves the chain's own (differentiated) one in place.
+            let measured = &mut self.chain.measurement_mut().qdot;
+            for ((m, &v), &given) in measured.iter_mut().zip(&self.qdot_in).zip(qdot) {
+                if !(v.is_nan() && given.is_finite()) {
+                    *m = v;
+                }
+            }
         }
         let [q_d, qdot_d, qddot_d] = &mut self.desired;
         match input.desired {
@@ -325,7 +370,23 @@ impl RobotLoop {
             w.update(&self.model, &measurement.q_filtered, &self.estimate);
         }
         if let Some(c) = self.contact.as_mut() {
-            status.contact = Some(c.update(&self.estimate, &measurement.qdot, &measurement.qddot));
+            let state = c.update(&self.estimate, &measurement.qdot, &measurement.qddot);
+            status.contact = Some(state);
+            if let Some((w, frames)) = self.contact_wrench.as_mut() {
+                match frames.get(state.link.max(0) as usize) {
+                    Some(&frame) if state.contact && frame != usize::MAX => {
+                        let joints = state.link as usize + 1;
+                        w.update_at(
+                            &self.model,
+                            &measurement.q_filtered,
+                            &self.estimate,
+                            frame,
+                            joints,
+                        );
+                    }
+                    _ => w.clear(),
+                }
+            }
         }
         status
     }
@@ -376,6 +437,17 @@ impl RobotLoop {
         ]
     }
 
+    /// With a contact floor, the wrench the environment applies at the touched link (the
+    /// origin of the last loaded joint's child link), from the estimate of that joint and
+    /// the ones before it, in the base axes and in the link's: force (N) then moment (N m).
+    /// Zero while no contact is flagged. With fewer than six joints before the link it is
+    /// the smallest wrench that explains their estimate (the part the Jacobian sees).
+    pub fn contact_wrench(&self) -> Option<(&[f64], &[f64])> {
+        self.contact_wrench
+            .as_ref()
+            .map(|(w, _)| (w.base(), w.tip()))
+    }
+
     /// The hand wrench of the last step in the base axes and in the tip's, with
     /// [`RobotLoop::enable_wrench`].
     pub fn wrench(&self) -> Option<(&[f64], &[f64])> {
@@ -397,4 +469,18 @@ impl RobotLoop {
 fn copy(dst: &mut [f64], src: &[f64]) {
     let k = dst.len().min(src.len());
     dst[..k].copy_from_slice(&src[..k]);
+}
+
+/// The frame of each joint's child link (the first frame the joint carries), `usize::MAX`
+/// for a joint that carries none.
+fn link_frames(model: &Model) -> Vec<usize> {
+    (0..model.nq())
+        .map(|j| {
+            model
+                .frames
+                .iter()
+                .position(|f| f.parent_joint == Some(j))
+                .unwrap_or(usize::MAX)
+        })
+        .collect()
 }

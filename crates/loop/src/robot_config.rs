@@ -21,6 +21,7 @@
 //! [observer]                     # kind, identification = FILE, network = FILE, ...
 //! [contact]
 //! floor = "contact_floor.json"   # a ContactFloor file (admittance calibrate-contact)
+//! deadband = false               # the admittance ignores an estimate inside the floor
 //! ```
 
 use std::collections::BTreeMap;
@@ -171,6 +172,11 @@ pub struct ContactSection {
     /// The contact-floor file (`admittance_control::ContactFloor`), relative to the loop
     /// file.
     pub floor: PathBuf,
+    /// The admittance takes the floor's contact thresholds as a deadband on the estimate
+    /// (issue 31, item 3: an untouched arm stays on its reference; a push moves it by its
+    /// excess over the floor). Default false.
+    #[serde(default)]
+    pub deadband: bool,
 }
 
 impl RobotConfig {

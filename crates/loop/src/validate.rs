@@ -4,15 +4,21 @@
 use crate::config::{ControllerKind, LoopConfig, ObserverKind};
 use crate::error::LoopError;
 
+/// The fastest control rate a loop accepts (Hz): a 10 us period, beyond any robot's bus.
+const MAX_CONTROL_RATE_HZ: f64 = 100_000.0;
+
 impl<Training> LoopConfig<Training> {
     /// Every problem of the settings, each at its key (empty: valid). The components
     /// check their own tables again when they are built ([`crate::ClosedLoop::from_config`]).
     pub fn problems(&self) -> Vec<LoopError> {
         let mut out = Vec::new();
-        if !(self.control_rate_hz.is_finite() && self.control_rate_hz > 0.0) {
+        if !(self.control_rate_hz > 0.0 && self.control_rate_hz <= MAX_CONTROL_RATE_HZ) {
             out.push(LoopError::invalid(
                 "control_rate_hz",
-                format!("is {}, must be > 0 Hz", self.control_rate_hz),
+                format!(
+                    "is {}, must be in (0, {MAX_CONTROL_RATE_HZ}] Hz",
+                    self.control_rate_hz
+                ),
             ));
         }
         self.controller_problems(&mut out);

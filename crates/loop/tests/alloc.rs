@@ -125,6 +125,25 @@ fn a_robot_step_allocates_nothing() {
         assert_eq!(l.implausible_samples(), 2, "{observer}");
         assert!(l.torque().iter().all(|t| t.is_finite()));
     }
+    // With contact detection and the touched link's wrench: a floor low enough that the
+    // exercise's motion and faults raise and drop the flags.
+    let n = 7;
+    let noise: Vec<f64> = (0..n * 20_000)
+        .map(|k| 1e-3 * ((k * 7919 % 1000) as f64 / 1000.0 - 0.5))
+        .collect();
+    let zeros = vec![0.0; noise.len()];
+    let floor =
+        admittance_control::calibrate_contact(&noise, &zeros, &zeros, n, 1e-3, 1.0).unwrap();
+    let mut l = RobotLoop::new(
+        model.clone(),
+        &config("kind = \"momentum\"\ninput_filter_hz = 10.0"),
+        Path::new("."),
+        None,
+        Some(floor),
+    )
+    .unwrap();
+    assert_eq!(exercise(&mut l), 0, "with a contact floor");
+    assert!(l.contact_wrench().is_some());
     // The counter itself works.
     assert!(count(|| drop(std::hint::black_box(vec![1u8; 16]))) > 0);
 }

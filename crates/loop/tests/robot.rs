@@ -330,3 +330,159 @@ fn a_repeated_reading_of_a_moving_joint_is_reported_from_its_first_stale_sample(
         "{flagged:?}"
     );
 }
+
+/// A floor calibrated on 60 s of a made-up false torque, uniform in +-0.05 N m.
+fn noise_floor() -> admittance_control::ContactFloor {
+    let (n, samples) = (7, 60_000);
+    let mut state = 12345u64;
+    let estimates: Vec<f64> = (0..n * samples)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            0.1 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+        })
+        .collect();
+    let zeros = vec![0.0; n * samples];
+    admittance_control::calibrate_contact(&estimates, &zeros, &zeros, n, 1e-3, 1.0).unwrap()
+}
+
+#[test]
+fn with_the_floor_as_its_deadband_an_untouched_arm_stays_on_its_reference() {
+    let floor = noise_floor();
+    let lowest = floor
+        .contact_thresholds
+        .iter()
+        .cloned()
+        .fold(f64::INFINITY, f64::min);
+    let highest = floor.contact_thresholds.iter().cloned().fold(0.0, f64::max);
+    let model = model();
+    let mut data = Data::new(&model);
+    // The measured torque misses a constant half of the lowest level on every joint (a model
+    // error inside the floor) for 3 s, then a push of five times the highest level on joint 2.
+    let mut run = |deadband: bool| -> (f64, f64) {
+        let with = format!("contact.deadband={deadband}");
+        let config = RobotConfig::from_toml_with(
+            LOOP_TOML,
+            Path::new("loop.toml"),
+            &["contact.floor=\"floor.json\"", &with],
+        )
+        .unwrap();
+        let mut l = RobotLoop::new(
+            model.clone(),
+            &config,
+            Path::new("."),
+            None,
+            Some(floor.clone()),
+        )
+        .unwrap();
+        let (mut untouched, mut pushed) = (0.0f64, 0.0f64);
+        for k in 0..4000 {
+            let q = POSE;
+            let mut tau = [0.0; 7];
+            tau.copy_from_slice(
+                rnea(&model, &mut data, &q, &[0.0; 7], &[0.0; 7])
+                    .unwrap()
+                    .as_slice(),
+            );
+            for t in tau.iter_mut() {
+                *t -= 0.5 * lowest;
+            }
+            if k >= 3000 {
+                tau[1] -= 5.0 * highest;
+            }
+            let status = step_measured(&mut l, k, &q, &tau);
+            // The touched link's wrench is zero until the push is flagged, then explains
+            // joint 2's estimate from the two joints before the link.
+            let contact = status.contact.expect("a floor was given");
+            let wrench = l.contact_wrench().expect("a floor was given").0;
+            if k < 3000 {
+                assert!(
+                    !contact.contact && wrench.iter().all(|w| *w == 0.0),
+                    "step {k}"
+                );
+            } else if k == 3999 {
+                assert!(contact.contact && contact.link == 1, "{contact:?}");
+                // At the link's origin, on joint 2's axis, the smallest wrench that
+                // explains a torque on joint 2 is a moment of about that torque.
+                let moment = wrench[3..].iter().map(|m| m * m).sum::<f64>().sqrt();
+                assert!(moment > 0.5 * 5.0 * highest, "{wrench:?}");
+            }
+            let offset = (l.reference()[0][1] - POSE[1]).abs();
+            if k < 3000 {
+                untouched = untouched.max(
+                    l.reference()[0]
+                        .iter()
+                        .zip(POSE)
+                        .fold(0.0, |m, (r, p)| m.max((r - p).abs())),
+                );
+            } else {
+                pushed = pushed.max(offset);
+            }
+        }
+        (untouched, pushed)
+    };
+    let (still, moved) = run(true);
+    assert!(still < 1e-9, "drift with the deadband: {still} rad");
+    // Its excess over the level (at least 3.75 levels) at a stiffness of 5 N m/rad, damped
+    // over the second it lasts: still more than a tenth of a level's worth of radians.
+    assert!(
+        moved > 0.1 * highest,
+        "the push moved joint 2 by {moved} rad"
+    );
+    let (drift, _) = run(false);
+    assert!(
+        drift > 1e-3,
+        "without the deadband the false torque moves the arm: {drift} rad"
+    );
+}
+
+/// Issue 34's attack campaign: a robot that reports velocities can report an absurd one. 20
+/// samples of -1e300 rad/s on joint 2 are flagged as implausible velocities, the chain's own
+/// velocity stands in for them, and the estimate stays with a clean run's.
+#[test]
+fn an_absurd_measured_velocity_is_flagged_and_not_integrated() {
+    let model = model();
+    let mut data = Data::new(&model);
+    let run = |absurd: bool, data: &mut Data| {
+        let mut l = robot_loop(&[]);
+        let mut out = Vec::new();
+        for k in 0..3000 {
+            let (q, tau) = motion(&model, data, k);
+            let t = k as f64 * 1e-3;
+            let mut v = [0.0; 7];
+            for (i, vi) in v.iter_mut().enumerate() {
+                let w = 1.0 + 0.3 * i as f64;
+                *vi = 0.1 * w * (w * t).cos();
+            }
+            if absurd && (1000..1020).contains(&k) {
+                v[1] = -1e300;
+            }
+            let s = l.step(&RobotInput {
+                time: t,
+                q: &q,
+                qdot: Some(&v),
+                tau: Some(&tau),
+                desired: None,
+            });
+            out.push((s.implausible, l.external_torque_estimate().to_vec()));
+        }
+        (out, l.implausible_samples())
+    };
+    let (clean, none) = run(false, &mut data);
+    assert_eq!(none, 0);
+    let (hit, count) = run(true, &mut data);
+    assert_eq!(count, 20);
+    for (g, _) in &hit[1000..1020] {
+        let g = g.expect("flagged");
+        assert_eq!((g.gate, g.joint), (Implausible::Velocity, 1));
+    }
+    let gap = (1000..3000)
+        .map(|k| {
+            (0..7)
+                .map(|i| (hit[k].1[i] - clean[k].1[i]).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert!(gap < 0.5, "estimate off a clean run by {gap} N m");
+}

@@ -75,6 +75,54 @@ impl PyClosedLoop {
     fn slice(&self, k: usize) -> &[f64] {
         &self.input[k * self.n..(k + 1) * self.n]
     }
+
+    /// The input slot `k` of `q, tau, q_d, qdot_d, qddot_d, tau_ext` (`n` values), for a
+    /// caller that fills it in place (`step_input` reads them all).
+    pub(crate) fn slot_mut(&mut self, k: usize) -> &mut [f64] {
+        &mut self.input[k * self.n..(k + 1) * self.n]
+    }
+
+    /// The command of the last step.
+    pub(crate) fn torque_now(&self) -> &[f64] {
+        self.inner.torque()
+    }
+
+    /// `tau` = this loop's last command (what `step` does with `tau=None`).
+    pub(crate) fn hold_command(&mut self) {
+        let n = self.n;
+        self.input[n..2 * n].copy_from_slice(self.inner.torque());
+    }
+
+    /// Number of joints.
+    pub(crate) fn joints(&self) -> usize {
+        self.n
+    }
+
+    /// One control period at `t` on the inputs already in the buffer (`step`'s code,
+    /// shared with the co-simulation's `CosimStepper`).
+    pub(crate) fn step_input(&mut self, t: f64) -> PyResult<()> {
+        let n = self.n;
+        let b = &self.input;
+        let measurement = self
+            .chain
+            .sample(t, &b[..n], &b[n..2 * n])
+            .map_err(|e| value_error(e.to_string()))?;
+        let status = self.inner.step(&LoopInput {
+            time: t,
+            q_d: &b[2 * n..3 * n],
+            qdot_d: &b[3 * n..4 * n],
+            qddot_d: &b[4 * n..5 * n],
+            measurement,
+            true_external_torque: &b[5 * n..],
+        });
+        self.time = t;
+        self.faults.record(status.controller);
+        if !status.observer_ok {
+            self.observer_faults += 1;
+        }
+        self.status = Some(status);
+        Ok(())
+    }
 }
 
 #[pymethods]
@@ -159,25 +207,7 @@ impl PyClosedLoop {
                 _ => b[5 * n..].fill(0.0),
             }
         }
-        let b = &self.input;
-        let measurement = self
-            .chain
-            .sample(t, &b[..n], &b[n..2 * n])
-            .map_err(|e| value_error(e.to_string()))?;
-        let status = self.inner.step(&LoopInput {
-            time: t,
-            q_d: &b[2 * n..3 * n],
-            qdot_d: &b[3 * n..4 * n],
-            qddot_d: &b[4 * n..5 * n],
-            measurement,
-            true_external_torque: &b[5 * n..],
-        });
-        self.time = t;
-        self.faults.record(status.controller);
-        if !status.observer_ok {
-            self.observer_faults += 1;
-        }
-        self.status = Some(status);
+        self.step_input(t)?;
         Ok((
             vector_out(py, self.inner.torque(), outs[0].as_ref(), "out[0]")?,
             vector_out(
@@ -289,6 +319,55 @@ pub struct PyVariantRecorder {
     input: Vec<f64>,
 }
 
+impl PyVariantRecorder {
+    /// Number of joints.
+    pub(crate) fn joints(&self) -> usize {
+        self.n
+    }
+
+    /// The buffer of `q, qdot, tau_ext, applied` (`n` each), for a caller that fills it in
+    /// place (`add_input` reads it).
+    pub(crate) fn input_mut(&mut self) -> &mut [f64] {
+        &mut self.input
+    }
+
+    /// `add`'s gathering on the plant's values already in the buffer (shared with the
+    /// co-simulation's `CosimStepper`).
+    pub(crate) fn add_input(&mut self, closed_loop: &PyClosedLoop) -> PyResult<Option<String>> {
+        let n = self.n;
+        let Some(status) = closed_loop.status.as_ref() else {
+            return Err(value_error(
+                "VariantRecorder.add: the loop has not stepped yet",
+            ));
+        };
+        let gather = self
+            .gather
+            .as_mut()
+            .ok_or_else(|| PyRuntimeError::new_err("VariantRecorder: already finished"))?;
+        let b = &self.input;
+        let desired = Desired {
+            q_d: closed_loop.slice(2),
+            qdot_d: closed_loop.slice(3),
+            qddot_d: closed_loop.slice(4),
+        };
+        let plant = PlantStep {
+            q: &b[..n],
+            qdot: &b[n..2 * n],
+            tau_ext: &b[2 * n..3 * n],
+            applied: &b[3 * n..],
+        };
+        let divergence = gather.add(
+            closed_loop.time,
+            &desired,
+            closed_loop.chain.measurement(),
+            &closed_loop.inner,
+            status,
+            &plant,
+        );
+        Ok(divergence.map(|d| d.reason.clone()))
+    }
+}
+
 #[pymethods]
 impl PyVariantRecorder {
     #[new]
@@ -338,15 +417,6 @@ impl PyVariantRecorder {
                 closed_loop.n
             )));
         }
-        let Some(status) = closed_loop.status.as_ref() else {
-            return Err(value_error(
-                "VariantRecorder.add: the loop has not stepped yet",
-            ));
-        };
-        let gather = self
-            .gather
-            .as_mut()
-            .ok_or_else(|| PyRuntimeError::new_err("VariantRecorder: already finished"))?;
         let b = &mut self.input;
         read_vector(q, "q", &mut b[..n], JOINTS)?;
         read_vector(qdot, "qdot", &mut b[n..2 * n], JOINTS)?;
@@ -355,26 +425,7 @@ impl PyVariantRecorder {
             Some(v) if !v.is_none() => read_vector(v, "applied", &mut b[3 * n..], JOINTS)?,
             _ => b[3 * n..].copy_from_slice(closed_loop.inner.torque()),
         }
-        let desired = Desired {
-            q_d: closed_loop.slice(2),
-            qdot_d: closed_loop.slice(3),
-            qddot_d: closed_loop.slice(4),
-        };
-        let plant = PlantStep {
-            q: &b[..n],
-            qdot: &b[n..2 * n],
-            tau_ext: &b[2 * n..3 * n],
-            applied: &b[3 * n..],
-        };
-        let divergence = gather.add(
-            closed_loop.time,
-            &desired,
-            closed_loop.chain.measurement(),
-            &closed_loop.inner,
-            status,
-            &plant,
-        );
-        Ok(divergence.map(|d| d.reason.clone()))
+        self.add_input(&closed_loop)
     }
 
     /// Ends the variant: its metrics (as in `summary.json`) from then on in `metrics`.

@@ -21,6 +21,8 @@ mod config;
 mod contact;
 mod control;
 mod convert;
+mod cosim;
+mod cosim_free_motion;
 mod free_motion;
 mod identification;
 mod model;
@@ -83,6 +85,8 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<contact::PyContactDetector>()?;
     m.add_class::<closed_loop::PyClosedLoop>()?;
     m.add_class::<closed_loop::PyVariantRecorder>()?;
+    m.add_class::<cosim::PyCosimStepper>()?;
+    m.add_class::<cosim_free_motion::PyFreeMotionStepper>()?;
     m.add_class::<network::PyNetwork>()?;
     m.add_class::<identification::PyIdentification>()?;
     m.add_class::<payload::PyPayload>()?;

@@ -52,6 +52,13 @@ fn observer_input<'b>(
     {
         read_vector(obj, name, &mut b[k * n..(k + 1) * n], JOINTS)?;
     }
+    // A value beyond what any arm measures (the bound of free-motion data, issue 34) takes
+    // the path of a NaN: the update faults instead of integrating it into the estimate.
+    for v in b[..4 * n].iter_mut() {
+        if v.abs() > admittance_learning::broad::MAX_ABS_DATA_VALUE {
+            *v = f64::NAN;
+        }
+    }
     Ok(ObserverInput {
         time,
         q: &b[..n],
@@ -65,9 +72,10 @@ fn observer_input<'b>(
 /// `LearnedObserver`, `HybridObserver` and `OracleObserver` (not constructed directly).
 ///
 /// The estimate has docs/method.md's sign: the torque the environment applies to the robot.
-/// `update` never raises on bad numbers: on a non-finite input or an invalid `dt` it returns
-/// zeros and records the fault in `fault` / `fault_count` (the momentum observer restarts
-/// its integral at the next valid sample). Arguments of the wrong shape are a `ValueError`.
+/// `update` never raises on bad numbers: on a non-finite input (or one beyond +-1e12, the
+/// bound of free-motion data) or an invalid `dt` it returns zeros and records the fault in
+/// `fault` / `fault_count` (the momentum observer restarts its integral at the next valid
+/// sample). Arguments of the wrong shape are a `ValueError`.
 #[pyclass(subclass, module = "admittance._admittance", name = "Observer")]
 pub struct PyObserver {
     inner: AnyObserver,

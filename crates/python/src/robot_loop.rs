@@ -76,6 +76,12 @@ impl PyRobotLoop {
         qdot_d: Option<&Bound<'py, PyAny>>,
         qddot_d: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        // As the C ABI's ADM_ERR_TIME: nothing is stepped on a time that is not finite.
+        if !t.is_finite() {
+            return Err(value_error(format!(
+                "`t` is {t}: the sample time must be finite (nothing was stepped)"
+            )));
+        }
         let n = self.n;
         let b = &mut self.input;
         read_vector(q, "q", &mut b[..n], JOINTS)?;
@@ -139,6 +145,7 @@ impl PyRobotLoop {
                     Implausible::Angle => "angle",
                     Implausible::Jump => "jump",
                     Implausible::Torque => "torque",
+                    Implausible::Velocity => "velocity",
                 };
                 (g.joint, gate)
             }),
@@ -212,6 +219,19 @@ impl PyRobotLoop {
         self.inner
             .wrench()
             .map(|(b, t)| (PyArray1::from_slice(py, b), PyArray1::from_slice(py, t)))
+    }
+
+    /// With a contact floor, the wrench at the touched link of the last step `(base, link)`
+    /// (force N, moment N m, in the base axes and the link's; zero while no contact is
+    /// flagged); else None.
+    #[getter]
+    fn contact_wrench<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> Option<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        self.inner
+            .contact_wrench()
+            .map(|(b, l)| (PyArray1::from_slice(py, b), PyArray1::from_slice(py, l)))
     }
 
     fn __repr__(&self) -> String {

@@ -68,6 +68,21 @@ def test_momentum_observer_faults_and_errors(baxter):
         adm.MomentumObserver(baxter, gain=[1.0, 2.0])
 
 
+def test_an_absurd_finite_torque_is_a_fault_and_is_not_integrated(baxter):
+    # Issue 34: one torque of 1e300 used to leave the momentum observer's estimate near
+    # 1e274 N m a second later; beyond +-1e12 a value now takes the path of a NaN.
+    data = contact_data(baxter, seconds=2.0)
+    clean = run(adm.MomentumObserver(baxter, gain=50.0), data)
+    t, q, qd, qdd, tau = data
+    hit = tau.copy()
+    hit[500, 2] = 1e300
+    obs = adm.MomentumObserver(baxter, gain=50.0)
+    est = run(obs, (t, q, qd, qdd, hit))
+    np.testing.assert_array_equal(est[500], np.zeros(7))
+    assert obs.fault_count == 1
+    assert np.max(np.abs(est[1500:] - clean[1500:])) < 1e-3
+
+
 def test_learned_observer_is_the_network_minus_the_torque(baxter, network):
     t, q, qd, qdd, tau = contact_data(baxter, seconds=0.2)
     raw = network.predict(q, qd, qdd) - tau

@@ -77,3 +77,13 @@ def test_a_missing_file_is_named(deployed, tmp_path):
     (copy / "arm.urdf").unlink()
     with pytest.raises(ValueError, match="arm.urdf"):
         adm.RobotLoop.load(str(copy))
+
+
+def test_a_time_that_is_not_finite_is_refused_and_nothing_is_stepped(deployed):
+    loop = adm.RobotLoop.load(str(deployed))
+    loop.step(0.0, POSE)
+    before = loop.status
+    for t in (np.nan, np.inf, -np.inf):
+        with pytest.raises(ValueError, match="`t` is .*must be finite"):
+            loop.step(t, POSE)
+    assert loop.status == before

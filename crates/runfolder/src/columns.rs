@@ -63,6 +63,17 @@ pub const HAND_DESIRED: &str = "x_hand_d";
 /// The axis suffixes of the hand columns.
 pub const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// With `[contact]` (issue 31): 1 while the detector flags a contact, else 0.
+pub const CONTACT: &str = "contact";
+/// With `[contact]`: 1 while the detector flags a collision, else 0.
+pub const COLLISION: &str = "collision";
+/// With `[contact]`: the last loaded joint's index in chain order (the touched part of the
+/// chain), -1 when no joint is flagged.
+pub const CONTACT_LINK: &str = "contact_link";
+/// With `[contact]`: each joint's contact level at this step (N m: the floor's threshold
+/// grown with the joint's speed and acceleration), per joint.
+pub const CONTACT_LEVEL: &str = "contact_level";
+
 /// The per-joint signals of free-motion data (`free_motion.csv`), in the order written.
 pub const FREE_MOTION: [&str; 4] = ["q", "qdot", "qddot", "tau"];
 

@@ -41,6 +41,12 @@ pub fn observer_validation(variant: &str) -> String {
     format!("validation_{variant}.csv")
 }
 
+/// The contact floor a variant detected with (`[contact]`): `contact_floor_VARIANT.json`,
+/// a contact-floor file (`admittance calibrate-contact`'s format).
+pub fn contact_floor(variant: &str) -> String {
+    format!("contact_floor_{variant}.json")
+}
+
 /// The f network's per-node weight norms (dynamic nodes): `weights_VARIANT.csv`.
 pub fn node_weights(variant: &str) -> String {
     format!("weights_{variant}.csv")

@@ -91,6 +91,7 @@ metrics! {
     FAULTS = "faults", "", false, WholeRun, "control steps with a controller fault (safe hold applied)";
     STALE_MEASUREMENTS = "stale_measurements", "", false, WholeRun, "control steps on which some joint's encoder reading was stale (frozen or dropped)";
     OBSERVER_FAULTS = "observer_faults", "", false, WholeRun, "observer updates that reported a fault";
+    GATED_SAMPLES = "gated_samples", "", false, WholeRun, "samples the plausibility gates refused, by the gate of the first refused value (angle, jump, torque)";
     TORQUE_LIMIT_VIOLATIONS = "torque_limit_violations", "", false, WholeRun, "commands beyond the effort limit (must be 0)";
     NONFINITE_TORQUES = "nonfinite_torques", "", false, WholeRun, "commands that were not finite (must be 0)";
     CONTROLLER_STEP_MEDIAN_US = "controller_step_median_us", "us", false, WholeRun, "median wall time of one controller step";
@@ -113,6 +114,23 @@ metrics! {
     ESTIMATE_COVERAGE_MEAN = "estimate_coverage_mean", "", false, Evaluation, "mean coverage of the hybrid observer's input by its network's training data";
     IDENTIFICATION_EXPECTED_FALSE_TORQUE_RMS = "identification_expected_false_torque_rms", "N m", true, Validation, "the identified model's RMS false torque on the validation data, free motion it was not fitted on";
     IDENTIFICATION_CACHED = "identification_cached", "", false, Run, "whether the identification came from the cache";
+    CONTACT_PROMISED_FALSE_ALARMS_PER_HOUR = "contact_promised_false_alarms_per_hour", "1/h", false, Run, "the contact floor's promise: false contact events per hour ([contact] false_alarms_per_hour)";
+    CONTACT_THRESHOLDS = "contact_thresholds", "N m", true, Run, "the contact floor's contact level at rest (it grows with speed and acceleration)";
+    COLLISION_THRESHOLDS = "collision_thresholds", "N m", true, Run, "the contact floor's collision level at rest";
+    CONTACT_UNTOUCHED_S = "contact_untouched_s", "s", false, NoContact, "time nothing touched the arm (outside every push and the 50 ms after it)";
+    CONTACT_FALSE_EVENTS = "contact_false_events", "", false, NoContact, "contact events raised while nothing touched the arm";
+    COLLISION_FALSE_EVENTS = "collision_false_events", "", false, NoContact, "collision events raised while nothing touched the arm";
+    CONTACT_FALSE_ALARMS_PER_HOUR = "contact_false_alarms_per_hour", "1/h", false, NoContact, "contact_false_events per hour of untouched time, against the promise";
+    CONTACT_PUSHES = "contact_pushes", "", false, Contact, "pushes (stretches of non-zero true external torque)";
+    CONTACT_PUSHES_DETECTED = "contact_pushes_detected", "", false, Contact, "pushes flagged as contact during them or within 50 ms after";
+    CONTACT_PUSHES_BY_SIZE = "contact_pushes_by_size", "", false, Contact, "pushes by peak |true torque| / contact level over the joints";
+    CONTACT_DETECTED_BY_SIZE = "contact_detected_by_size", "", false, Contact, "share of the pushes of each size flagged as contact";
+    CONTACT_OVER_TWICE = "contact_over_twice", "", false, Contact, "pushes whose true torque exceeded twice a joint's contact level";
+    CONTACT_OVER_TWICE_WITHIN_50MS = "contact_over_twice_within_50ms", "", false, Contact, "of those, flagged within 50 ms of the crossing";
+    CONTACT_DELAY_MEDIAN_S = "contact_delay_median_s", "s", false, Contact, "median time from the 2x crossing to the contact flag";
+    CONTACT_DELAY_MAX_S = "contact_delay_max_s", "s", false, Contact, "largest time from the 2x crossing to the contact flag";
+    CONTACT_ISOLATION = "contact_isolation", "", false, Contact, "share of the detected pushes whose last loaded joint the detector named";
+    REFERENCE_OFFSET_MAX_ABS = "reference_offset_max_abs", "rad", true, Evaluation, "largest |q_r - q_d|: with nobody touching the arm, the admittance's drift";
 }
 
 /// The entry of a metric, by name.

@@ -23,6 +23,9 @@ pub const KEY_FORMAT: &str = "format";
 pub const KEY_FORMAT_VERSION: &str = "format_version";
 /// Key of the scenario name.
 pub const KEY_SCENARIO: &str = "scenario";
+/// Key of the scenario file the run was made from, as an absolute path: what the relative
+/// paths of the folder's `scenario.toml` are relative to (`admittance deploy RUN_DIR`).
+pub const KEY_SCENARIO_FILE: &str = "scenario_file";
 /// Key of the joint names (chain order).
 pub const KEY_JOINTS: &str = "joints";
 /// Key of the per-variant metrics.

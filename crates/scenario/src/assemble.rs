@@ -38,6 +38,8 @@ pub(crate) struct Assembly {
     pub identification: Option<IdentificationMetrics>,
     /// What the URDF loader accepted with a warning (`file:line: element: problem`).
     pub arm_warnings: Vec<String>,
+    /// Contact detection (`[contact]`).
+    pub contact: Option<crate::contact_run::ContactRun>,
 }
 
 /// Resolves, validates and builds one variant of a scenario.
@@ -117,8 +119,18 @@ pub(crate) fn assemble(
         &mut observer_training,
         &mut observer_validation,
     )?;
-    let closed_loop =
+    let mut closed_loop =
         ClosedLoop::from_config(&model, &loop_config, trained).map_err(|e| loop_err(&ctx, e))?;
+    let contact = contact_run(
+        &ctx,
+        &scenario,
+        &model,
+        path,
+        options,
+        simulate,
+        identified.as_ref(),
+        &mut closed_loop,
+    )?;
     Ok(Assembly {
         scenario,
         joints,
@@ -143,7 +155,39 @@ pub(crate) fn assemble(
             .map(|w| w.to_string())
             .chain(gain_warnings)
             .collect(),
+        contact,
     })
+}
+
+/// The detector of `[contact]`, with its floor as the admittance's deadband when the table
+/// asks for it.
+#[allow(clippy::too_many_arguments)]
+fn contact_run(
+    ctx: &Ctx<'_>,
+    scenario: &Scenario,
+    model: &Model,
+    path: &Path,
+    options: &RunOptions,
+    simulate: SimulateData<'_>,
+    identified: Option<&IdentifiedNominal>,
+    closed_loop: &mut ClosedLoop,
+) -> Result<Option<crate::contact_run::ContactRun>, ScenarioError> {
+    let floor = crate::contact_run::contact_floor(
+        ctx, scenario, model, path, options, simulate, identified,
+    )?;
+    let Some(floor) = floor else {
+        return Ok(None);
+    };
+    if scenario.contact.as_ref().is_some_and(|c| c.deadband) {
+        if let Some(compliance) = closed_loop.admittance_mut() {
+            compliance
+                .set_deadband(&floor.contact_thresholds)
+                .map_err(|e| ctx.config_err("contact.deadband", &e))?;
+        }
+    }
+    crate::contact_run::ContactRun::new(&floor)
+        .map(Some)
+        .map_err(|e| ctx.config_err("contact", &e))
 }
 
 /// The identification the momentum and hybrid observers run on: fitted on the training

@@ -47,6 +47,22 @@ impl FreeMotionEstimates {
         span / (self.len().max(2) - 1) as f64
     }
 
+    /// The estimate through the loop's first-order low-pass at `cutoff_hz`
+    /// (`observer.cutoff_hz`; 0 leaves it as it is), as the run's estimate passes it.
+    pub fn low_passed(mut self, cutoff_hz: f64) -> Result<Self, ConfigError> {
+        if cutoff_hz == 0.0 || self.is_empty() {
+            return Ok(self);
+        }
+        let rate = 1.0 / self.mean_dt();
+        let mut filter = admittance_loop::EstimateLowPass::new(self.joints, cutoff_hz, rate)
+            .map_err(|e| ConfigError::new("observer.cutoff_hz", e.to_string()))?;
+        for row in self.estimate.chunks_exact_mut(self.joints) {
+            let y = filter.update(row);
+            row.copy_from_slice(y);
+        }
+        Ok(self)
+    }
+
     /// The samples from `from_s` after the first on.
     pub fn after(&self, from_s: f64) -> FreeMotionEstimates {
         let t0 = self.t.first().copied().unwrap_or(0.0);
@@ -74,6 +90,22 @@ pub fn momentum_estimates(
     identification: &Identification,
     observer: &MomentumObserverConfig,
 ) -> Result<FreeMotionEstimates, ConfigError> {
+    momentum_estimates_at(
+        data,
+        identification,
+        observer,
+        identification.summary.input_filter_hz,
+    )
+}
+
+/// [`momentum_estimates`] with the inputs conditioned at `filter_hz` (a scenario's
+/// `observer.input_filter_hz`, which its identification was fitted at).
+pub fn momentum_estimates_at(
+    data: &FreeMotionData,
+    identification: &Identification,
+    observer: &MomentumObserverConfig,
+    filter_hz: f64,
+) -> Result<FreeMotionEstimates, ConfigError> {
     let n = data.dof();
     if n != identification.model.nq() {
         return Err(ConfigError::new(
@@ -84,7 +116,6 @@ pub fn momentum_estimates(
             ),
         ));
     }
-    let filter_hz = identification.summary.input_filter_hz;
     let (x, tau) = observer_training_arrays(data, filter_hz)
         .map_err(|e| ConfigError::new("input_filter_hz", e.to_string()))?;
     let mut obs = MomentumObserver::from_identification(identification, observer)?;
@@ -141,7 +172,20 @@ pub fn calibrate_contact_on(
     observer: &MomentumObserverConfig,
     config: &ContactCalibrationConfig,
 ) -> Result<ContactFloor, ConfigError> {
-    let e = momentum_estimates(data, identification, observer)?.after(CONTACT_WARM_UP_S);
+    let e = momentum_estimates(data, identification, observer)?;
+    floor_of_estimates(&e, &data.joints, identification, observer, config)
+}
+
+/// The contact floor of the momentum observer's estimates `e` over free motion (after the
+/// warm-up), recording what they were made with.
+pub fn floor_of_estimates(
+    e: &FreeMotionEstimates,
+    joints: &[String],
+    identification: &Identification,
+    observer: &MomentumObserverConfig,
+    config: &ContactCalibrationConfig,
+) -> Result<ContactFloor, ConfigError> {
+    let e = e.after(CONTACT_WARM_UP_S);
     let mut floor = calibrate_contact_with(
         &e.estimate,
         &e.qdot,
@@ -150,7 +194,7 @@ pub fn calibrate_contact_on(
         e.mean_dt(),
         config,
     )?;
-    floor.joints = data.joints.clone();
+    floor.joints = joints.to_vec();
     floor.source.insert("observer".into(), "momentum".into());
     floor.source.insert(
         "observer_gain".into(),

@@ -216,6 +216,7 @@ impl ExternalVariant {
                 nodes: None,
                 hand: None,
                 coverage: lp.estimate_coverage(),
+                contact: None,
             });
         }
         None

@@ -32,10 +32,13 @@
 mod assemble;
 mod budget;
 mod contact;
+mod contact_run;
+mod contact_score;
 mod context;
 mod error;
 mod external;
 mod free_motion;
+mod gate_stage;
 mod gather;
 mod hand;
 mod hand_paths;
@@ -58,9 +61,10 @@ mod trajectory;
 pub use admittance_loop::Divergence;
 pub use assemble::gain_warnings;
 pub use contact::{
-    calibrate_contact_on, count_false_alarms, detect, momentum_estimates, FalseAlarms,
-    FreeMotionEstimates, CONTACT_WARM_UP_S,
+    calibrate_contact_on, count_false_alarms, detect, floor_of_estimates, momentum_estimates,
+    FalseAlarms, FreeMotionEstimates, CONTACT_WARM_UP_S,
 };
+pub use contact_score::ContactMetrics;
 pub use error::{Invalid, ScenarioError};
 pub use external::{Desired, ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
@@ -80,8 +84,8 @@ pub use runner::{run_variant, VariantRun};
 pub use series::{TimeSeries, NODE_WEIGHT_INTERVAL};
 pub use source::ScenarioSource;
 pub use spec::{
-    mid_range, ArmSpec, DynamicNodesSpec, OutputSpec, RecordSpec, Scenario, SineSpec, TrainingSpec,
-    TrajectorySpec,
+    mid_range, ArmSpec, ContactSpec, DynamicNodesSpec, OutputSpec, RecordSpec, Scenario, SineSpec,
+    TrainingSpec, TrajectorySpec,
 };
 pub use training::{TrainedNetwork, VALIDATION_DECIMATION};
 pub use trajectory::Trajectory;

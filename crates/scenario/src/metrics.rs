@@ -60,6 +60,10 @@ pub struct VariantMetrics {
     pub admittance_error_rms: Option<Vec<f64>>,
     /// Observer updates that faulted.
     pub observer_faults: usize,
+    /// Samples the plausibility gates refused, by the gate of the first refused value
+    /// (`angle`, `jump`, `torque`; issue 34); absent when the loop's caller gates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gated_samples: Option<BTreeMap<String, u64>>,
     /// Lowest coverage of the observer's input by its network's training data over the
     /// evaluation window (hybrid; 1 inside the data, 0 far outside).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -84,6 +88,9 @@ pub struct VariantMetrics {
     /// Task-space runs: the hand.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub hand: Option<HandMetrics>,
+    /// Contact detection against the true external torque (`[contact]`, issue 31).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<crate::contact_score::ContactMetrics>,
 }
 
 /// The hand of a task-space run (issue 16; docs/outputs.md).
@@ -312,6 +319,7 @@ mod tests {
                 identification_cached: false,
             }),
             weight_norm_final: Some(BTreeMap::new()),
+            gated_samples: Some(BTreeMap::new()),
             dynamic_nodes: Some(DynamicNodeMetrics {
                 approx_rmse_full: 1.0,
                 approx_rmse_after_discard: 1.0,

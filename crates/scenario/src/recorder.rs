@@ -13,6 +13,8 @@ pub(crate) struct Recorder {
     pub free_motion: Option<TimeSeries>,
     previous_filtered_torque: Vec<f64>,
     decimation: usize,
+    with_coverage: bool,
+    with_contact: bool,
 }
 
 /// One row's values beyond the per-joint signals.
@@ -35,6 +37,8 @@ pub(crate) struct Row<'a> {
     pub hand: Option<[&'a [f64]; 5]>,
     /// The observer's coverage of its input (with [`Recorder::record_coverage`]).
     pub coverage: Option<f64>,
+    /// The contact flags and each joint's contact level (with [`Recorder::record_contact`]).
+    pub contact: Option<(admittance_control::ContactState, &'a [f64])>,
 }
 
 impl Recorder {
@@ -62,6 +66,8 @@ impl Recorder {
             }),
             previous_filtered_torque: vec![0.0; joints.len()],
             decimation,
+            with_coverage: false,
+            with_contact: false,
         }
     }
 
@@ -91,6 +97,17 @@ impl Recorder {
         self.series
             .columns
             .push(admittance_runfolder::columns::ESTIMATE_COVERAGE.into());
+        self.with_coverage = true;
+    }
+
+    /// Adds the columns `contact`, `collision`, `contact_link` and `contact_level.*`
+    /// (`[contact]`; docs/outputs.md) after the others.
+    pub fn record_contact(&mut self, joints: &[String]) {
+        use admittance_runfolder::columns;
+        let c = &mut self.series.columns;
+        c.extend([columns::CONTACT, columns::COLLISION, columns::CONTACT_LINK].map(String::from));
+        c.extend(columns::per_joint(columns::CONTACT_LEVEL, joints));
+        self.with_contact = true;
     }
 
     /// Whether step `k` writes a row.
@@ -128,8 +145,20 @@ impl Recorder {
                 row.extend_from_slice(v);
             }
         }
-        if row.len() < self.series.columns.len() {
+        if self.with_coverage {
             row.push(r.coverage.unwrap_or(f64::NAN));
+        }
+        if self.with_contact {
+            let n = self.previous_filtered_torque.len();
+            match r.contact {
+                Some((s, level)) => {
+                    row.push(f64::from(u8::from(s.contact)));
+                    row.push(f64::from(u8::from(s.collision)));
+                    row.push(f64::from(s.link));
+                    row.extend_from_slice(level);
+                }
+                None => row.extend(std::iter::repeat_n(f64::NAN, 3 + n)),
+            }
         }
         self.series.rows.push(row);
     }

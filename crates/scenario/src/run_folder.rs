@@ -197,7 +197,10 @@ pub fn run_scenario_variants(
     crate::hand_paths::across_variants(&mut runs, evaluation_start);
     let judged: Vec<(String, VariantHealth)> =
         runs.iter().map(|r| (r.name.clone(), judge(r))).collect();
-    let summary = summary_json(&scenario_name, &runs, &judged);
+    let mut summary = summary_json(&scenario_name, &runs, &judged);
+    if let Ok(file) = std::fs::canonicalize(path) {
+        summary[summary::KEY_SCENARIO_FILE] = json!(file.display().to_string());
+    }
     let settings = RunSettings::new(
         first.duration,
         evaluation_start,
@@ -214,6 +217,12 @@ pub fn run_scenario_variants(
             }
             if let Some(v) = &run.observer_validation {
                 write_series_csv(&partial.join(files::observer_validation(&run.name)), v)?;
+            }
+            if let Some(floor) = &run.contact_floor {
+                let p = partial.join(files::contact_floor(&run.name));
+                floor
+                    .save(&p)
+                    .map_err(|e| RunError::Finish(e.to_string()))?;
             }
         }
         let scenario_copy = partial.join(files::SCENARIO);

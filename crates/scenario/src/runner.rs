@@ -49,6 +49,8 @@ pub struct VariantRun {
     pub health_settings: admittance_runfolder::health::HealthSettings,
     /// The variant's settings as the run applied them (`settings.json`).
     pub settings: admittance_runfolder::settings::VariantSettings,
+    /// The contact floor the run detected with (`[contact]`), written to the run folder.
+    pub contact_floor: Option<admittance_control::ContactFloor>,
 }
 
 /// Resolves, validates and runs one variant of a scenario file.
@@ -85,6 +87,7 @@ fn simulate_variant(
         observer_validation,
         identification,
         arm_warnings,
+        mut contact,
     } = parts;
     let n = joints.len();
     let dt = closed_loop.dt();
@@ -110,7 +113,12 @@ fn simulate_variant(
     if closed_loop.estimate_coverage().is_some() {
         recorder.record_coverage();
     }
+    if contact.is_some() {
+        recorder.record_contact(&joints);
+    }
     let mut gather = Gather::new(&model, &joints, &effort, steps, with_hand);
+    let mut gates = crate::gate_stage::GateStage::new(&model, &scenario.gates, dt)
+        .map_err(|e| ctx.err("plant", e.to_string(), None))?;
     let mut kinematics = HandKinematics::new(&model);
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
@@ -125,8 +133,8 @@ fn simulate_variant(
         }
         let t = k as f64 * dt;
         trajectory.eval(t, &mut q_d, &mut qd_d, &mut qdd_d);
-        let m = sensors
-            .sample(t, plant.q(), closed_loop.torque())
+        let m = gates
+            .sample(&mut sensors, t, plant.q(), closed_loop.torque())
             .map_err(sim_err)?;
         recorder.sensed(t, m);
         if let Some(adm) = oracle_admittance.as_mut() {
@@ -153,6 +161,9 @@ fn simulate_variant(
         // A sample older than this period (the driver repeated a joint's last reading) is
         // stale whether or not the controller could tell from the values.
         let stale_sample = m.sample_time.iter().any(|&ts| t - ts > 0.5 * dt);
+        if let Some(c) = contact.as_mut() {
+            c.update(closed_loop.external_torque_estimate(), &m.qdot, &m.qddot);
+        }
         gather.after_control(k, &status, &closed_loop, stale_sample);
         if let Some(ev) = events.as_mut() {
             ev.after_step(k, t, &model, plant.q(), plant.qdot(), &closed_loop);
@@ -177,6 +188,9 @@ fn simulate_variant(
             .and_then(|c| c.task_space())
             .map(|a| &a.wrench_estimate()[..3]);
         if t >= scenario.evaluation_start {
+            if let Some(c) = contact.as_mut() {
+                c.in_window(t, &record.tau_ext, closed_loop.q_r(), &q_d);
+            }
             gather.in_window(&WindowSample {
                 q_r: closed_loop.q_r(),
                 q: plant.q(),
@@ -216,6 +230,7 @@ fn simulate_variant(
                 hand: hand_estimate
                     .map(|f_hat| [&hand_force[..], f_hat, &p_hand[..], &p_ref[..], &p_d[..]]),
                 coverage: closed_loop.estimate_coverage(),
+                contact: contact.as_ref().map(|c| c.flags()),
             });
         }
     }
@@ -232,8 +247,13 @@ fn simulate_variant(
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
+    if let Some(c) = contact {
+        run.contact_floor = Some(c.floor().clone());
+        run.metrics.contact = Some(c.finish());
+    }
     run.health_settings = scenario.health.clone();
     run.metrics.identification = identification;
+    run.metrics.gated_samples = Some(gates.counts());
     run.settings = settings;
     Ok(run)
 }
@@ -281,5 +301,6 @@ pub(crate) fn finish(
         arm_warnings: Vec::new(),
         health_settings: Default::default(),
         settings: Default::default(),
+        contact_floor: None,
     })
 }

@@ -51,4 +51,4 @@ pub use plant::config::{
 pub use plant::error::SimError;
 pub use plant::friction::Friction;
 pub use plant::{Plant, PlantCounters, StepRecord};
-pub use sensors::{FaultConfig, FaultKind, SensorConfig, Sensors};
+pub use sensors::{FaultConfig, FaultKind, SensorConfig, Sensors, DEFAULT_SPIKE_VALUE};

@@ -15,7 +15,13 @@
 //! deliver a NaN sample, or a stale sample (the previous raw value repeated, with its old
 //! `Measurement::sample_time`). A NaN reaches `Measurement::q` as NaN; the joint's
 //! filter, velocity and acceleration hold their previous values, so the derived signals
-//! stay finite. The injected faults are reported in the measurement as ground truth.
+//! stay finite. The injected NaN and stale faults are reported in the measurement as
+//! ground truth. A spike (`angle_spike`, `torque_spike`) delivers one finite but absurd
+//! reading (`value`, e.g. an angle of 1e20 rad or a torque of 1e300 N m) in place of the
+//! angle or the torque: finiteness checks pass it, only plausibility gates
+//! (`admittance_loop::PlausibilityGates`, given to [`Sensors::sample_screened`]) stop it.
+//! A window shorter than one period (`t_start = 2.0, t_end = 2.0005` at 1 kHz) gives a
+//! single sample.
 
 use admittance_dynamics::Model;
 use admittance_loop::{LowPass, Measurement, SignalChain};
@@ -24,7 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
-use crate::checks::{joint_index, non_negative, window};
+use crate::checks::{finite, joint_index, non_negative, window};
 use crate::plant::error::{check_len, SimError};
 
 fn infinity() -> f64 {
@@ -72,7 +78,15 @@ pub enum FaultKind {
     Nan,
     /// The sample repeats the previous one (old timestamp).
     Stale,
+    /// The angle reads `value` (rad or m): finite, however absurd.
+    AngleSpike,
+    /// The torque reading (the command held over the period, or a robot's measured
+    /// torque) is `value` (N m).
+    TorqueSpike,
 }
+
+/// What a spike reads when its `value` is not given.
+pub const DEFAULT_SPIKE_VALUE: f64 = 1e20;
 
 /// A sensor fault injected on `joints` (all when empty) for samples taken in
 /// `[t_start, t_end)`.
@@ -88,6 +102,10 @@ pub struct FaultConfig {
     /// Window end (s), exclusive. Default `inf`.
     #[serde(default = "infinity")]
     pub t_end: f64,
+    /// The reading of an `angle_spike` (rad or m) or `torque_spike` (N m): finite, only
+    /// for those kinds. Default (absent) [`DEFAULT_SPIKE_VALUE`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
 }
 
 impl Default for FaultConfig {
@@ -97,6 +115,7 @@ impl Default for FaultConfig {
             joints: Vec::new(),
             t_start: 0.0,
             t_end: f64::INFINITY,
+            value: None,
         }
     }
 }
@@ -145,6 +164,15 @@ impl SensorConfig {
                 joint_index(model, || format!("{p}.joints[{j}]"), name)?;
             }
             window(&p, f.t_start, f.t_end)?;
+            if let Some(v) = f.value {
+                if matches!(f.kind, FaultKind::Nan | FaultKind::Stale) {
+                    return Err(SimError::config(
+                        format!("{p}.value"),
+                        "is the reading of a spike: give it only with kind = \"angle_spike\" or \"torque_spike\"",
+                    ));
+                }
+                finite(|| format!("{p}.value"), v)?;
+            }
         }
         Ok(())
     }
@@ -165,6 +193,13 @@ struct Fault {
     mask: Vec<bool>,
     start: f64,
     end: f64,
+    value: f64,
+}
+
+impl Fault {
+    fn hits(&self, i: usize, time: f64) -> bool {
+        self.mask[i] && self.start <= time && time < self.end
+    }
 }
 
 /// The fake encoders of a plant (built from a [`SensorConfig`]): noise, quantisation and
@@ -183,6 +218,7 @@ pub struct Sensors {
     /// This sample's readings, their sample times and the faults injected in them.
     raw: Vec<f64>,
     raw_time: Vec<f64>,
+    raw_tau: Vec<f64>,
     injected_nan: Vec<bool>,
     injected_stale: Vec<bool>,
     chain: SignalChain,
@@ -212,6 +248,7 @@ impl Sensors {
                     mask,
                     start: f.t_start,
                     end: f.t_end,
+                    value: f.value.unwrap_or(DEFAULT_SPIKE_VALUE),
                 }
             })
             .collect();
@@ -229,6 +266,7 @@ impl Sensors {
             have_raw: vec![false; n],
             raw: vec![0.0; n],
             raw_time: vec![0.0; n],
+            raw_tau: vec![0.0; n],
             injected_nan: vec![false; n],
             injected_stale: vec![false; n],
             chain,
@@ -265,13 +303,34 @@ impl Sensors {
         q_true: &[f64],
         tau_commanded: &[f64],
     ) -> Result<&Measurement, SimError> {
+        self.sample_screened(time, q_true, tau_commanded, |_, _, _| {})
+    }
+
+    /// As [`Sensors::sample`], with `screen(time, angles, torques)` run on the raw
+    /// readings before the signal chain sees them, where a robot program runs its
+    /// plausibility gates (`admittance_loop::RobotLoop`): a value it sets to NaN takes the
+    /// NaN path. Does not allocate.
+    pub fn sample_screened(
+        &mut self,
+        time: f64,
+        q_true: &[f64],
+        tau_commanded: &[f64],
+        screen: impl FnOnce(f64, &mut [f64], &mut [f64]),
+    ) -> Result<&Measurement, SimError> {
         check_len("q_true", q_true, self.n)?;
         check_len("tau_commanded", tau_commanded, self.n)?;
         for (i, &q) in q_true.iter().enumerate() {
             self.read_encoder(i, time, q);
+            self.raw_tau[i] = tau_commanded[i];
+            for f in &self.faults {
+                if f.kind == FaultKind::TorqueSpike && f.hits(i, time) {
+                    self.raw_tau[i] = f.value;
+                }
+            }
         }
+        screen(time, &mut self.raw, &mut self.raw_tau);
         self.chain
-            .sample_at(time, &self.raw, &self.raw_time, tau_commanded)
+            .sample_at(time, &self.raw, &self.raw_time, &self.raw_tau)
             .map_err(|e| SimError::config("sensors", e.to_string()))?;
         let m = self.chain.measurement_mut();
         m.injected_nan.copy_from_slice(&self.injected_nan);
@@ -284,11 +343,14 @@ impl Sensors {
         let noise: f64 = self.rng.sample(StandardNormal);
         let mut nan = false;
         let mut stale = false;
+        let mut spike = None;
         for f in &self.faults {
-            if f.mask[i] && f.start <= time && time < f.end {
+            if f.hits(i, time) {
                 match f.kind {
                     FaultKind::Nan => nan = true,
                     FaultKind::Stale => stale = true,
+                    FaultKind::AngleSpike => spike = Some(f.value),
+                    FaultKind::TorqueSpike => {}
                 }
             }
         }
@@ -301,6 +363,10 @@ impl Sensors {
         } else if nan {
             self.raw_time[i] = time;
             f64::NAN
+        } else if let Some(value) = spike {
+            // Not kept as the last reading: a stale fault repeats the last genuine one.
+            self.raw_time[i] = time;
+            value
         } else {
             let mut x = q_true + self.noise_std * noise;
             if self.resolution > 0.0 {

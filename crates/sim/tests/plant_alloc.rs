@@ -77,12 +77,28 @@ fn everything(integrator: Integrator, solver: Solver) -> PlantConfig {
                 joints: vec!["left_e0".into()],
                 t_start: 0.1,
                 t_end: 0.103,
+                value: None,
             },
             FaultConfig {
                 kind: FaultKind::Stale,
                 joints: vec![],
                 t_start: 0.12,
                 t_end: 0.124,
+                value: None,
+            },
+            FaultConfig {
+                kind: FaultKind::AngleSpike,
+                joints: vec!["left_w0".into()],
+                t_start: 0.13,
+                t_end: 0.135,
+                value: Some(1e20),
+            },
+            FaultConfig {
+                kind: FaultKind::TorqueSpike,
+                joints: vec!["left_w1".into()],
+                t_start: 0.14,
+                t_end: 0.145,
+                value: None,
             },
         ],
         ..Default::default()
@@ -93,15 +109,29 @@ fn everything(integrator: Integrator, solver: Solver) -> PlantConfig {
 #[test]
 fn plant_step_and_sensor_sample_do_not_allocate() {
     let model = baxter();
+    let speed_settings = [(false, 1e-12), (true, 1e-6)];
     for integrator in INTEGRATORS {
-        for solver in [Solver::Auto, Solver::Cholesky] {
-            let cfg = everything(integrator, solver);
+        for (solver, (hold, tol)) in [Solver::Auto, Solver::Cholesky]
+            .into_iter()
+            .flat_map(|s| speed_settings.map(|h| (s, h)))
+        {
+            let mut cfg = everything(integrator, solver);
+            cfg.hold_mass_matrix = hold;
+            cfg.newton_tolerance = tol;
             let mut plant = Plant::new(&model, &cfg).unwrap();
             let mut sensors = Sensors::new(&model, &cfg.sensors, cfg.control_rate_hz).unwrap();
+            // The robot program's gates screen the readings (the spikes are refused there).
+            let mut gates = admittance_loop::PlausibilityGates::new(
+                &model,
+                &admittance_loop::GateConfig::default(),
+                1.0 / cfg.control_rate_hz,
+            )
+            .unwrap();
             let target = cfg.initial_q.clone();
             let mut tau = [0.0; 7];
             // One period outside the count (nothing is lazily allocated, but be fair).
             plant.step_control(&tau).unwrap();
+            let mut spiked = 0;
             let count = count_allocations(|| {
                 for k in 0..250 {
                     if k == 100 {
@@ -109,7 +139,15 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
                     }
                     plant.step_control(&tau).unwrap();
                     plant.step(&tau).unwrap();
-                    let m = sensors.sample(plant.time(), plant.q(), &tau).unwrap();
+                    let t = plant.time();
+                    if (0.13..0.135).contains(&t) || (0.14..0.145).contains(&t) {
+                        spiked += 1;
+                    }
+                    let m = sensors
+                        .sample_screened(plant.time(), plant.q(), &tau, |t, q, tau| {
+                            gates.check(t, q, Some(tau));
+                        })
+                        .unwrap();
                     for i in 0..7 {
                         let q = if m.q[i].is_finite() {
                             m.q[i]
@@ -123,9 +161,11 @@ fn plant_step_and_sensor_sample_do_not_allocate() {
             });
             assert_eq!(
                 count, 0,
-                "{integrator} / {solver:?}: {count} allocations in 250 control periods"
+                "{integrator} / {solver:?} / hold {hold}: {count} allocations in 250 control periods"
             );
             assert!(plant.q().iter().all(|q| q.is_finite()));
+            assert!(spiked > 1);
+            assert_eq!(gates.faults(), spiked, "every spiked sample is refused");
             assert!(
                 plant.counters().newton_iterations > 0 && plant.counters().nonfinite_commands > 0
             );

@@ -88,7 +88,7 @@ fn rows_of(p: &Payload) -> Vec<[f64; 3]> {
 /// that the new file still says it; empty when that file cannot be read as JSON (it loaded,
 /// so this does not happen for a file `identify` wrote).
 fn base_data(path: &Path) -> BTreeMap<String, Value> {
-    std::fs::read_to_string(path)
+    admittance_files::read_regular_text(path, admittance_files::TEXT_LIMIT)
         .ok()
         .and_then(|t| serde_json::from_str::<Value>(&t).ok())
         .and_then(|v| v.pointer("/payload/data").cloned())

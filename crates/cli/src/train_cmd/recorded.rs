@@ -29,7 +29,8 @@ pub struct IdentificationFile {
 impl IdentificationFile {
     /// Reads `path` for `arm` (its fingerprint must match).
     pub fn load(path: &Path, arm: &Model) -> Result<Self, CliError> {
-        let bytes = std::fs::read(path)
+        // Regular files only (a FIFO would block the read for ever, issue 34 item 9).
+        let bytes = admittance_files::read_regular(path, admittance_files::TEXT_LIMIT)
             .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))?;
         let ident = Identification::load(path, arm).map_err(|e| CliError::input(e.to_string()))?;
         let input_filter_hz = recorded_filter_hz(&bytes, &ident);

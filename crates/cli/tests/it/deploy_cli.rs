@@ -125,3 +125,42 @@ fn what_cannot_be_deployed_is_refused_naming_why() {
         "keep"
     );
 }
+
+/// A run folder anywhere deploys: its scenario.toml's relative paths are taken from the
+/// scenario file the run was made from (summary.json's `scenario_file`).
+#[test]
+fn a_run_folder_outside_the_project_deploys() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    let run_s = run.to_str().unwrap();
+    let (code, _, stderr) = admittance(&[
+        "run",
+        "scenarios/admittance.toml",
+        "--variant",
+        "momentum",
+        "--set",
+        "duration=0.2",
+        "--set",
+        "evaluation_start=0.1",
+        "--out",
+        run_s,
+        "--no-recording",
+    ]);
+    assert!(code == 0 || code == 4, "{stderr}");
+    let out = tmp.path().join("deploy");
+    let (code, _, stderr) = admittance(&[
+        "deploy",
+        run_s,
+        "--variant",
+        "momentum",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let d = Deployment::load(&out).unwrap();
+    assert!(d.made_by["scenario"]
+        .as_str()
+        .unwrap()
+        .ends_with("scenarios/admittance.toml"));
+    assert_eq!(RobotLoop::load(&out, &[]).unwrap().dof(), 7);
+}

@@ -285,3 +285,60 @@ fn report_never_writes_through_a_planted_link() {
         "another user's file"
     );
 }
+
+#[test]
+fn a_fifo_as_the_identification_of_evaluate_or_train_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("arm.ident.json");
+    mkfifo(&fifo);
+    let data = dir.path().join("data.csv");
+    let o = admittance_within(
+        &[
+            "excite",
+            "--urdf",
+            "models/baxter_left_arm.urdf",
+            "--duration",
+            "4",
+            "--iterations",
+            "20",
+            "--out",
+            data.to_str().unwrap(),
+        ],
+        120,
+    )
+    .expect("excite finishes");
+    assert!(o.status.success(), "{}", text(&o));
+    let (fifo, data) = (fifo.to_str().unwrap(), data.to_str().unwrap());
+    let net = dir.path().join("net.broad");
+    let urdf = "models/baxter_left_arm.urdf";
+    for args in [
+        vec![
+            "evaluate",
+            "--data",
+            data,
+            "--urdf",
+            urdf,
+            "--identification",
+            fifo,
+        ],
+        vec![
+            "train",
+            "--data",
+            data,
+            "--urdf",
+            urdf,
+            "--nominal",
+            fifo,
+            "--out",
+            net.to_str().unwrap(),
+        ],
+    ] {
+        let o = admittance_within(&args, 60).unwrap_or_else(|| panic!("{args:?} hung"));
+        assert!(!o.status.success(), "{args:?}: {}", text(&o));
+        let t = text(&o);
+        assert!(
+            t.contains("FIFO") && t.contains("arm.ident.json"),
+            "{args:?}: {t}"
+        );
+    }
+}

@@ -228,8 +228,14 @@ impl TaskSpaceAdmittance {
     /// The same admittance with a deadband on the joint-torque estimate per joint (N m),
     /// applied before the wrench is estimated: see [`crate::Admittance::with_deadband`].
     pub fn with_deadband(mut self, deadband: &[f64]) -> Result<Self, ConfigError> {
-        self.deadband = crate::contact::checked_deadband(deadband, self.n)?;
+        self.set_deadband(deadband)?;
         Ok(self)
+    }
+
+    /// Sets the deadband in place (see `with_deadband`); on an error nothing changes.
+    pub fn set_deadband(&mut self, deadband: &[f64]) -> Result<(), ConfigError> {
+        self.deadband = crate::contact::checked_deadband(deadband, self.n)?;
+        Ok(())
     }
 
     /// The deadband per joint (empty when there is none).

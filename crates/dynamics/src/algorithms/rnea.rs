@@ -82,6 +82,29 @@ pub fn mass_matrix_and_bias(
     Ok(())
 }
 
+/// `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
+/// `data.nonlinear_effects` and `data.gravity_torque`: [`mass_matrix_and_bias`] without the
+/// mass matrix, the same values bit for bit (the same passes on the same placements). For a
+/// step that holds `M` from an earlier configuration (the plant's `hold_mass_matrix`).
+pub fn bias_and_gravity(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    gravity: bool,
+) -> Result<(), DimensionError> {
+    let n = model.nq();
+    check_len("q", q, n)?;
+    check_len("v", v, n)?;
+    update_joint_placements(model, data, q);
+    rnea_pass_at_placements(model, data, Some(v), None, None);
+    data.nonlinear_effects.copy_from(&data.tau);
+    if gravity {
+        gravity_pass(model, data);
+    }
+    Ok(())
+}
+
 /// `G(q)` on `data.joint_placements` as they are.
 #[inline(always)]
 fn gravity_pass(model: &Model, data: &mut Data) {

@@ -153,7 +153,16 @@ impl Identification {
         if file.joint_terms.len() != n || file.inertial_parameters.len() != 10 * n {
             return Err(err(path, format!("holds {} joint terms and {} parameters for an arm of {n} joints: the file is damaged", file.joint_terms.len(), file.inertial_parameters.len())));
         }
+        let names: Vec<&str> = urdf_model.joint_names().collect();
+        if file.joints != names {
+            return Err(err(path, format!(
+                "names the joints [{}], the arm's chain has [{}]: the file was edited or is for another arm",
+                file.joints.join(", "),
+                names.join(", ")
+            )));
+        }
         check_physical(file).map_err(|m| err(path, m))?;
+        check_summary(&file.summary, n).map_err(|m| err(path, m))?;
         let model = crate::algorithms::regressor::with_inertial_parameters(
             urdf_model,
             &file.inertial_parameters,
@@ -225,6 +234,70 @@ fn check_physical(file: &IdentificationFile) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The largest torque delay a summary may state (s): `identify` tries at most 30 ms.
+const MAX_DELAY_S: f64 = 1.0;
+
+/// What consumers take from the summary (the input conditioning, the torque delay, the
+/// acceleration gain) and the errors it reports must be values `identify` can write: a
+/// cut-off of 0 (none) or a finite positive frequency, delays finite and within
+/// [`MAX_DELAY_S`], a gain from 0 to 1, errors and times finite and not negative.
+fn check_summary(s: &IdentificationSummary, n: usize) -> Result<(), String> {
+    let hz = s.input_filter_hz;
+    if !(0.0..=MAX_COEFFICIENT).contains(&hz) {
+        return Err(format!(
+            "summary.input_filter_hz is {}: must be 0 (no conditioning) or a finite positive cut-off (Hz)",
+            short(hz)
+        ));
+    }
+    if !(0.0..=1.0).contains(&s.acceleration_gain) {
+        return Err(format!(
+            "summary.acceleration_gain is {}: must be 0 to 1",
+            s.acceleration_gain
+        ));
+    }
+    if !(s.delay_s.is_empty() || s.delay_s.len() == n) {
+        return Err(format!(
+            "summary.delay_s has {} values for {n} joints",
+            s.delay_s.len()
+        ));
+    }
+    if let Some(d) = s.delay_s.iter().find(|d| !(d.abs() <= MAX_DELAY_S)) {
+        return Err(format!(
+            "summary.delay_s holds {} s: a torque delay is finite and within +-{MAX_DELAY_S} s",
+            short(*d)
+        ));
+    }
+    let errors = [
+        ("expected_false_torque_rms", &s.expected_false_torque_rms),
+        ("prior_false_torque_rms", &s.prior_false_torque_rms),
+    ];
+    for (key, values) in errors {
+        if let Some(v) = values.iter().find(|v| !(**v >= 0.0 && v.is_finite())) {
+            return Err(format!(
+                "summary.{key} holds {}: an rms error is finite and not negative",
+                short(*v)
+            ));
+        }
+    }
+    for (key, v) in [("ridge", s.ridge), ("step_response_s", s.step_response_s)] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(format!(
+                "summary.{key} is {v}: must be finite and not negative"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A number as a message shows it: plain, or with an exponent when far from 1.
+fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// The checked envelope's payload.

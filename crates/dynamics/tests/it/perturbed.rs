@@ -63,3 +63,30 @@ fn a_point_payload_adds_its_weight_through_the_jacobian() {
         .with_payload(&Payload::point_mass(-1.0, Vector3::zeros()))
         .is_err());
 }
+
+/// `bias_and_gravity` is `mass_matrix_and_bias` without the matrix: the same bias and
+/// gravity bits (the plant's held-mass-matrix steps rely on it), at poses and velocities
+/// along a path, on the nominal and a perturbed arm.
+#[test]
+fn bias_and_gravity_equals_mass_matrix_and_bias_bit_for_bit() {
+    let nominal = common::baxter();
+    let heavy = nominal.with_scaled_inertias(1.3).unwrap();
+    for model in [&nominal, &heavy] {
+        let (mut d0, mut d1) = (Data::new(model), Data::new(model));
+        for k in 0..40 {
+            let q: Vec<f64> = (0..7).map(|j| Q[j] + 0.37 * (k * 7 + j) as f64).collect();
+            let v: Vec<f64> = (0..7).map(|j| V[j] * (1.0 + 0.1 * k as f64)).collect();
+            for gravity in [false, true] {
+                mass_matrix_and_bias(model, &mut d0, &q, &v, gravity).unwrap();
+                bias_and_gravity(model, &mut d1, &q, &v, gravity).unwrap();
+                let bits = |x: &DVector<f64>| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&d0.nonlinear_effects), bits(&d1.nonlinear_effects));
+                if gravity {
+                    assert_eq!(bits(&d0.gravity_torque), bits(&d1.gravity_torque));
+                }
+            }
+        }
+    }
+    let mut data = Data::new(&nominal);
+    assert!(bias_and_gravity(&nominal, &mut data, &Q[..3], &V, true).is_err());
+}

@@ -106,3 +106,44 @@ fn negative_joint_terms_are_refused_naming_the_joint() {
         "{e}"
     );
 }
+
+#[test]
+fn renamed_joints_are_refused_naming_both_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = load_edited(dir.path(), |p| p["joints"][0] = "elsewhere".into()).unwrap_err();
+    assert!(
+        e.contains("[elsewhere,") && e.contains("the arm's chain has [left_s0,"),
+        "{e}"
+    );
+}
+
+#[test]
+fn what_consumers_take_from_the_summary_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    for (hz, shown) in [(-5.0, "-5"), (1e300, "1e300")] {
+        let e =
+            load_edited(dir.path(), |p| p["summary"]["input_filter_hz"] = hz.into()).unwrap_err();
+        assert!(
+            e.contains("summary.input_filter_hz") && e.contains(shown),
+            "{e}"
+        );
+    }
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["acceleration_gain"] = 3.0.into()
+    })
+    .unwrap_err();
+    assert!(e.contains("summary.acceleration_gain is 3"), "{e}");
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["delay_s"] = serde_json::json!([1e9, 0, 0, 0, 0, 0, 0])
+    })
+    .unwrap_err();
+    assert!(e.contains("summary.delay_s holds 1e9 s"), "{e}");
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["expected_false_torque_rms"] = serde_json::json!([0.1, -1.0])
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("summary.expected_false_torque_rms holds -1"),
+        "{e}"
+    );
+}

@@ -10,10 +10,13 @@
 //! prefetchers follow (a plain dimension-major copy reads `d` streams a node stride apart).
 //! Weights are node-major rows of `n` values.
 //!
-//! Every kernel has one generic body (`*_impl::<FMA>`) compiled twice: for the baseline
-//! target, and (on x86-64) inside a `#[target_feature(enable = "avx2,fma")]` wrapper selected
-//! at run time when the CPU has both features ([`Isa::detect`]). The two builds compute the
-//! same formulas; the FMA build rounds `a * b + c` once instead of twice.
+//! Every kernel has one generic body (`*_impl::<FMA>`) compiled three times: for the
+//! baseline target, and (on x86-64) inside `#[target_feature(enable = "avx2,fma")]` and
+//! `#[target_feature(enable = "avx512f,avx2,fma")]` wrappers selected at run time when the
+//! CPU has the features ([`Isa::detect`]). The builds compute the same formulas; the FMA
+//! builds round `a * b + c` once instead of twice. The AVX2 and AVX-512 builds perform the
+//! same operations lane by lane (only the vector width differs), so their results are equal
+//! bit for bit (`tests::avx512_equals_avx2_bit_for_bit`).
 
 /// Nodes processed side by side by the distance kernel: 32 with AVX2 (eight 4-wide
 /// accumulators, enough independent FMA chains to hide their latency), 16 for the baseline
@@ -23,6 +26,10 @@ pub(crate) const BLOCK: usize = 32;
 const BLOCK_GENERIC: usize = 16;
 #[cfg(target_arch = "x86_64")]
 const BLOCK_AVX2: usize = 32;
+/// The AVX-512 build takes the same 32-node blocks (four 8-wide registers per block), two
+/// blocks side by side ([`sq_dists_pairs`]) for eight independent FMA chains.
+#[cfg(target_arch = "x86_64")]
+const BLOCK_AVX512: usize = 32;
 
 /// `capacity` rounded up to a multiple of [`BLOCK`].
 pub(crate) fn padded(capacity: usize) -> usize {
@@ -44,6 +51,9 @@ pub(crate) enum Isa {
     /// AVX2 and FMA, verified present at run time.
     #[cfg(target_arch = "x86_64")]
     Avx2Fma,
+    /// AVX-512F with AVX2 and FMA, verified present at run time.
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
 }
 
 impl Isa {
@@ -54,6 +64,9 @@ impl Isa {
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")
             {
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    return Isa::Avx512;
+                }
                 return Isa::Avx2Fma;
             }
         }
@@ -216,12 +229,15 @@ pub(crate) struct Nodes<'a> {
 }
 
 macro_rules! dispatch {
-    ($isa:expr, $generic:expr, $avx2:expr) => {
+    ($isa:expr, $generic:expr, $avx2:expr, $avx512:expr) => {
         match $isa {
             // SAFETY: `Isa::Avx2Fma` is only constructed by `Isa::detect`, after checking at
             // run time that the CPU supports AVX2 and FMA.
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2Fma => unsafe { $avx2 },
+            // SAFETY: likewise for `Isa::Avx512` (AVX-512F, AVX2 and FMA).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { $avx512 },
             Isa::Generic => $generic,
         }
     };
@@ -237,6 +253,61 @@ fn sq_dists_impl<const FMA: bool, const B: usize>(
     for (b, out) in dist_sq.chunks_exact_mut(B).take(blocks).enumerate() {
         out.copy_from_slice(&block_sq_dist::<FMA, B>(z, nodes.centres_t, b * B));
     }
+}
+
+/// [`sq_dists_impl`] taking two blocks of `B` nodes side by side (twice the independent
+/// accumulator chains, for 8-wide registers); each node's sum is formed in the same order.
+#[inline(always)]
+fn sq_dists_pairs<const FMA: bool, const B: usize>(
+    z: &[f64],
+    nodes: Nodes<'_>,
+    dist_sq: &mut [f64],
+) {
+    let blocks = nodes.len.div_ceil(B);
+    let pairs = blocks / 2;
+    for (p, out) in dist_sq.chunks_exact_mut(2 * B).take(pairs).enumerate() {
+        let start = 2 * p * B;
+        let mut acc0 = [0.0f64; B];
+        let mut acc1 = [0.0f64; B];
+        let mut base0 = centre_slot(z.len(), 0, start);
+        let mut base1 = centre_slot(z.len(), 0, start + B);
+        for &zk in z {
+            if let (Some(b0), Some(b1)) = (
+                nodes.centres_t.get(base0..base0 + B),
+                nodes.centres_t.get(base1..base1 + B),
+            ) {
+                for j in 0..B {
+                    let t0 = zk - b0[j];
+                    acc0[j] = fmadd::<FMA>(t0, t0, acc0[j]);
+                    let t1 = zk - b1[j];
+                    acc1[j] = fmadd::<FMA>(t1, t1, acc1[j]);
+                }
+            }
+            base0 += BLOCK;
+            base1 += BLOCK;
+        }
+        out[..B].copy_from_slice(&acc0);
+        out[B..].copy_from_slice(&acc1);
+    }
+    if blocks % 2 == 1 {
+        let b = blocks - 1;
+        if let Some(out) = dist_sq.get_mut(b * B..(b + 1) * B) {
+            out.copy_from_slice(&block_sq_dist::<FMA, B>(z, nodes.centres_t, b * B));
+        }
+    }
+}
+
+/// The activations from the squared distances already in `dist_sq` (see [`activate_impl`]).
+#[inline(always)]
+fn gaussians_of_dists<const FMA: bool>(nodes: Nodes<'_>, dist_sq: &[f64], act: &mut [f64]) {
+    // Whole chunks when the buffers allow (they are `padded(capacity)` long in the layer).
+    let lanes = nodes.len.div_ceil(EXP_CHUNK) * EXP_CHUNK;
+    let lanes = if act.len() >= lanes && nodes.inv_width_sq.len() >= lanes {
+        lanes
+    } else {
+        nodes.len
+    };
+    gaussians_impl::<FMA>(dist_sq, nodes.inv_width_sq, nodes.cutoff, &mut act[..lanes]);
 }
 
 #[inline(always)]
@@ -263,6 +334,13 @@ unsafe fn activate_avx2(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64], act: &
     activate_impl::<true, BLOCK_AVX2>(z, nodes, dist_sq, act)
 }
 
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn activate_avx512(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64], act: &mut [f64]) {
+    sq_dists_pairs::<true, BLOCK_AVX512>(z, nodes, dist_sq);
+    gaussians_of_dists::<true>(nodes, dist_sq, act)
+}
+
 /// `dist_sq_i = ||z - u_i||^2` and `act_i = s_i(z)` (eq. 9) for the active nodes.
 /// `dist_sq` must hold `padded(len)` values, `act` at least `len`.
 pub(crate) fn activate(
@@ -278,7 +356,8 @@ pub(crate) fn activate(
     dispatch!(
         isa,
         activate_impl::<false, BLOCK_GENERIC>(z, nodes, dist_sq, act),
-        activate_avx2(z, nodes, dist_sq, act)
+        activate_avx2(z, nodes, dist_sq, act),
+        activate_avx512(z, nodes, dist_sq, act)
     )
 }
 
@@ -286,6 +365,12 @@ pub(crate) fn activate(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn sq_dists_avx2(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64]) {
     sq_dists_impl::<true, BLOCK_AVX2>(z, nodes, dist_sq)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn sq_dists_avx512(z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64]) {
+    sq_dists_pairs::<true, BLOCK_AVX512>(z, nodes, dist_sq)
 }
 
 /// `dist_sq_i = ||z - u_i||^2` for the active nodes (`dist_sq` holds `padded(len)` values).
@@ -296,7 +381,8 @@ pub(crate) fn sq_dists(isa: Isa, z: &[f64], nodes: Nodes<'_>, dist_sq: &mut [f64
     dispatch!(
         isa,
         sq_dists_impl::<false, BLOCK_GENERIC>(z, nodes, dist_sq),
-        sq_dists_avx2(z, nodes, dist_sq)
+        sq_dists_avx2(z, nodes, dist_sq),
+        sq_dists_avx512(z, nodes, dist_sq)
     )
 }
 
@@ -370,12 +456,19 @@ unsafe fn accumulate_avx2(act: &[f64], weights: &[f64], out: &mut [f64]) {
     accumulate_impl::<true>(act, weights, out)
 }
 
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn accumulate_avx512(act: &[f64], weights: &[f64], out: &mut [f64]) {
+    accumulate_impl::<true>(act, weights, out)
+}
+
 /// `out += W^T S` (eq. 10) for node-major `weights` with rows of length `out.len()`.
 pub(crate) fn accumulate(isa: Isa, act: &[f64], weights: &[f64], out: &mut [f64]) {
     dispatch!(
         isa,
         accumulate_impl::<false>(act, weights, out),
-        accumulate_avx2(act, weights, out)
+        accumulate_avx2(act, weights, out),
+        accumulate_avx512(act, weights, out)
     )
 }
 
@@ -474,12 +567,19 @@ unsafe fn update_avx2(act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, g
     update_impl::<true>(act, weights, e, decay, gain)
 }
 
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn update_avx512(act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
+    update_impl::<true>(act, weights, e, decay, gain)
+}
+
 /// One integration step of the update law, `W <- decay W + gain S e^T` (docs/method.md section 3).
 pub(crate) fn update(isa: Isa, act: &[f64], weights: &mut [f64], e: &[f64], decay: f64, gain: f64) {
     dispatch!(
         isa,
         update_impl::<false>(act, weights, e, decay, gain),
-        update_avx2(act, weights, e, decay, gain)
+        update_avx2(act, weights, e, decay, gain),
+        update_avx512(act, weights, e, decay, gain)
     )
 }
 
@@ -514,6 +614,12 @@ unsafe fn predict_avx2(z: &[f64], nodes: Nodes<'_>, weights: &[f64], out: &mut [
     predict_impl::<true, BLOCK_AVX2>(z, nodes, weights, out)
 }
 
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn predict_avx512(z: &[f64], nodes: Nodes<'_>, weights: &[f64], out: &mut [f64]) {
+    predict_impl::<true, BLOCK_AVX512>(z, nodes, weights, out)
+}
+
 /// `out += W^T S(z)` computed block by block on the stack, without touching layer state.
 pub(crate) fn predict(isa: Isa, z: &[f64], nodes: Nodes<'_>, weights: &[f64], out: &mut [f64]) {
     if nodes.inv_width_sq.len() < nodes.len {
@@ -522,94 +628,11 @@ pub(crate) fn predict(isa: Isa, z: &[f64], nodes: Nodes<'_>, weights: &[f64], ou
     dispatch!(
         isa,
         predict_impl::<false, BLOCK_GENERIC>(z, nodes, weights, out),
-        predict_avx2(z, nodes, weights, out)
+        predict_avx2(z, nodes, weights, out),
+        predict_avx512(z, nodes, weights, out)
     )
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn exp_neg_through_activate(isa: Isa, x: f64) -> f64 {
-        // One node at the origin, z = sqrt(x), unit width: activation exp(-x).
-        let centres_t = [0.0; BLOCK];
-        let inv = [1.0; BLOCK];
-        let nodes = Nodes {
-            centres_t: &centres_t,
-            len: 1,
-            inv_width_sq: &inv,
-            cutoff: MAX_EXPONENT,
-        };
-        let mut d2 = [0.0; BLOCK];
-        let mut s = [0.0; 1];
-        activate(isa, &[x.sqrt()], nodes, &mut d2, &mut s);
-        // Compare with the exact exponent used.
-        assert!((d2[0] - x).abs() <= 1e-12 * (1.0 + x));
-        s[0] / (-d2[0]).exp()
-    }
-
-    #[test]
-    fn exp_matches_std_over_the_range() {
-        let mut worst: f64 = 0.0;
-        let mut x = 0.0;
-        while x <= MAX_EXPONENT {
-            for isa in [Isa::Generic, Isa::detect()] {
-                worst = worst.max((exp_neg_through_activate(isa, x) - 1.0).abs());
-            }
-            let direct = exp_neg::<false>(x);
-            worst = worst.max(((direct - (-x).exp()) / (-x).exp()).abs());
-            x += 0.0137;
-        }
-        assert!(worst < 1e-15, "worst relative error {worst:e}");
-        assert_eq!(exp_neg::<false>(0.0), 1.0);
-        assert_eq!(gaussian(MAX_EXPONENT + 1.0, MAX_EXPONENT), 0.0);
-        assert_eq!(gaussian(f64::INFINITY, MAX_EXPONENT), 0.0);
-        assert_eq!(gaussian(f64::NAN, MAX_EXPONENT), 0.0);
-    }
-
-    #[test]
-    fn sq_dist_matches_naive() {
-        for d in 0..40 {
-            let a: Vec<f64> = (0..d).map(|k| (k as f64 * 0.37).sin()).collect();
-            let b: Vec<f64> = (0..d).map(|k| (k as f64 * 0.11).cos()).collect();
-            let naive: f64 = a.iter().zip(&b).map(|(x, y)| (x - y) * (x - y)).sum();
-            assert!((sq_dist(&a, &b) - naive).abs() <= 1e-12 * (1.0 + naive));
-        }
-    }
-
-    #[test]
-    fn output_and_update_specialisations_agree_with_dynamic() {
-        for isa in [Isa::Generic, Isa::detect()] {
-            for n in 1..=10usize {
-                let rows = 37;
-                let act: Vec<f64> = (0..rows)
-                    .map(|i| {
-                        if i % 5 == 0 {
-                            0.0
-                        } else {
-                            (i as f64 * 0.3).cos().abs()
-                        }
-                    })
-                    .collect();
-                let w: Vec<f64> = (0..rows * n).map(|k| (k as f64 * 0.7).sin()).collect();
-                let mut out = vec![0.5; n];
-                accumulate(isa, &act, &w, &mut out);
-                let mut reference = vec![0.5; n];
-                accumulate_dyn::<false>(&act, &w, &mut reference);
-                for (a, b) in out.iter().zip(&reference) {
-                    assert!((a - b).abs() < 1e-12);
-                }
-                let e: Vec<f64> = (0..n).map(|j| j as f64 - 2.0).collect();
-                for decay in [1.0, 0.9] {
-                    let mut w1 = w.clone();
-                    let mut w2 = w.clone();
-                    update(isa, &act, &mut w1, &e, decay, 0.01);
-                    update_dyn::<false>(&act, &mut w2, &e, decay, 0.01);
-                    for (a, b) in w1.iter().zip(&w2) {
-                        assert!((a - b).abs() < 1e-12);
-                    }
-                }
-            }
-        }
-    }
-}
+#[path = "kernels_tests.rs"]
+mod tests;

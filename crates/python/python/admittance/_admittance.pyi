@@ -180,8 +180,9 @@ class Observer:
     """An external-torque observer (base of the observers; not constructed directly). The
     estimate is the torque the environment applies to the robot.
 
-    ``update`` never raises on bad numbers: on a non-finite input or an invalid ``dt`` it
-    returns zeros and records the fault in ``fault`` / ``fault_count``.
+    ``update`` never raises on bad numbers: on a non-finite input (or one beyond +-1e12, the
+    bound of free-motion data) or an invalid ``dt`` it returns zeros and records the fault in
+    ``fault`` / ``fault_count``.
     """
 
     def update(
@@ -357,6 +358,8 @@ class RobotLoop:
     def reference(self) -> Tuple[Vector, Vector, Vector]: ...
     @property
     def wrench(self) -> Optional[Tuple[Vector, Vector]]: ...
+    @property
+    def contact_wrench(self) -> Optional[Tuple[Vector, Vector]]: ...
 
 class ClosedLoop:
     """One control period of the Rust loop (``admittance_loop::ClosedLoop``): the encoder
@@ -469,6 +472,63 @@ class VariantRecorder:
     @property
     def metrics(self) -> Optional[dict]:
         """The variant's ``summary.json`` metrics after ``finish``."""
+
+class CosimStepper:
+    """The MuJoCo co-simulation's control steps in Rust (``admittance.mujoco``): the encoder
+    read, the ``ClosedLoop`` step, the command and push into MuJoCo, ``mj_step``, the push's
+    ``J^T f`` and the ``VariantRecorder``'s gathering, as its stepwise Python loop does them.
+    ``plant``: ``MujocoArm.stepper_plant()`` (an arm without contacts); per step: the desired
+    motion, the encoder noise (times its standard deviation) ``(steps, n)``, the push
+    ``(steps, 3)`` and ``push_on`` ``(steps,)``."""
+
+    def __init__(
+        self,
+        closed_loop: ClosedLoop,
+        recorder: VariantRecorder,
+        plant: dict,
+        *,
+        dt: float,
+        q_d: np.ndarray,
+        qdot_d: np.ndarray,
+        qddot_d: np.ndarray,
+        noise: np.ndarray,
+        resolution: float,
+        push: np.ndarray,
+        push_on: List[bool],
+    ) -> None: ...
+    def run(self, start: int, end: int) -> Optional[str]:
+        """Runs the control steps ``start..end``; returns why the variant diverged (stop
+        then), or ``None``."""
+    @property
+    def steps(self) -> int:
+        """Control steps in the plan."""
+
+class FreeMotionStepper:
+    """The co-simulation's free-motion recording in Rust (``admittance.mujoco``): the encoder
+    read, the sensors' conditioning, the PD on the desired motion, the command into MuJoCo and
+    ``mj_step``, as its stepwise Python loop does them; the conditioned ``q``, ``qdot``,
+    ``qddot``, ``tau`` of each step written into the rows of ``out`` (float64 ``(steps, n)``)."""
+
+    def __init__(
+        self,
+        m: Model,
+        pd_config: Config,
+        plant: dict,
+        *,
+        dt: float,
+        sensor_cutoff_hz: float,
+        rate_hz: float,
+        resolution: float,
+        out: Dict[str, np.ndarray],
+    ) -> None: ...
+    def run(
+        self, start: int, q_d: np.ndarray, qdot_d: np.ndarray, qddot_d: np.ndarray, noise: np.ndarray
+    ) -> None:
+        """Records the steps from ``start`` on, one per row of the desired motion and the
+        encoder noise (times its standard deviation) ``(count, n)``."""
+    @property
+    def steps(self) -> int:
+        """Control steps of ``out``."""
 
 def write_run_folder(
     out: StrPath,

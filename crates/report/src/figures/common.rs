@@ -219,7 +219,12 @@ pub fn contact_spans(folder: &RunFolder, v: &Variant) -> Vec<Span> {
     } else {
         (windows, "environment acts (the run's settings)")
     };
-    spans
+    labelled_spans(spans, label)
+}
+
+/// Shaded spans of `intervals`, the first one carrying `label` in the legend.
+pub fn labelled_spans(intervals: Vec<(f64, f64)>, label: &str) -> Vec<Span> {
+    intervals
         .into_iter()
         .enumerate()
         .map(|(k, (from, to))| Span {

@@ -40,19 +40,10 @@ fn hand_contact_spans(v: &Variant) -> Vec<Span> {
         return Vec::new();
     };
     let on = |k: usize| f.iter().any(|c| c[k].is_finite() && c[k] != 0.0);
-    super::common::intervals(t, on)
-        .into_iter()
-        .enumerate()
-        .map(|(k, (from, to))| Span {
-            from,
-            to,
-            label: if k == 0 {
-                "hand in contact (f_hand non-zero)".into()
-            } else {
-                String::new()
-            },
-        })
-        .collect()
+    super::common::labelled_spans(
+        super::common::intervals(t, on),
+        "hand in contact (f_hand non-zero)",
+    )
 }
 
 fn force_figure(variants: &[&Variant]) -> Result<Figure, String> {

@@ -5,11 +5,13 @@
 //! comparison gives Figs 7-12 ([`deadzone`]), an observer comparison (and its free-motion
 //! data runs) Figs 13-20 ([`observer`]), dynamic nodes Figs 21-26 ([`dynamic_nodes`]); a run
 //! with hand columns adds the hand-contact figures ([`hand_contact`]), any other scenario
-//! gets generic ones ([`generic`]). A figure whose data is not in the folder is planned as unavailable, with
+//! gets generic ones ([`generic`]); a run with contact detection adds its figures
+//! ([`contact`]). A figure whose data is not in the folder is planned as unavailable, with
 //! the reason.
 
 mod catalogue;
 mod common;
+mod contact;
 mod deadzone;
 mod dynamic_nodes;
 mod generic;
@@ -47,6 +49,7 @@ pub fn plan(folder: &RunFolder, arm: Arm<'_>) -> Vec<Planned> {
     if has_hand_columns(folder) {
         out.extend(hand_contact::plan(folder));
     }
+    out.extend(contact::plan(folder));
     out
 }
 

@@ -26,6 +26,8 @@
 //! [observer]                 # kind = "none" | "oracle" | "momentum" | "learned" | "hybrid", nominal_inertia_scale, cutoff_hz, input_filter_hz, warmup
 //! [observer.training]        # learned / hybrid (the scenario's): free-motion data, validation data, nodes, friction inputs, cache; identify (momentum and hybrid on the identified arm)
 //! [record]                   # optional: free_motion_csv = true (free-motion data, docs/outputs.md)
+//! [contact]                  # optional: contact floor (calibration = free motion, or floor = FILE), deadband
+//! [gates]                    # optional: plausibility gates on the readings (enabled, angle_margin, jump_factor, torque_factor)
 //! [dynamic_nodes]            # optional: discard / grow events (experiment C)
 //! [health]                   # optional: thresholds of the run's health rules (max_hand_error = 0.04 m, ...)
 //! [variants.NAME]            # overrides of any of the above, per variant
@@ -33,6 +35,8 @@
 
 mod arm_fit;
 pub use arm_fit::mid_range;
+mod contact;
+pub use contact::ContactSpec;
 mod validate;
 pub(crate) use validate::loop_problem;
 
@@ -298,6 +302,14 @@ pub struct Scenario {
     /// learned observers' network.
     #[serde(default = "ObserverConfig::default")]
     pub observer: ObserverConfig<TrainingSpec>,
+    /// Contact and collision detection on the estimate (issue 31).
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+    /// The robot program's plausibility gates on the sensors' readings (issue 34;
+    /// `admittance_loop::GateConfig`, a robot loop file's `[signals.gates]`). Default: on,
+    /// with a robot's defaults.
+    #[serde(default)]
+    pub gates: admittance_loop::GateConfig,
     /// Dynamic-node events (experiment C).
     #[serde(default)]
     pub dynamic_nodes: Option<DynamicNodesSpec>,

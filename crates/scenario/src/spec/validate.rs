@@ -16,6 +16,8 @@ impl Scenario {
         out.extend(self.loop_config().problems().into_iter().map(loop_problem));
         self.validate_dynamic_nodes(&mut out);
         self.validate_training(&mut out);
+        self.validate_contact(&mut out);
+        out.extend(self.gates.problems("gates").into_iter().map(loop_problem));
         for (key, problem) in self.health.problems() {
             out.push(
                 Invalid::new(format!("health.{key}"), problem)

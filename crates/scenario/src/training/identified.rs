@@ -19,8 +19,9 @@ use crate::progress::{RunOptions, Stage};
 use crate::spec::Scenario;
 
 /// Version of what an identification cache key stands for (bump when it changes; 2: the
-/// convex physical fit of issue 30, whose results differ from the first fit's).
-const IDENTIFICATION_KEY_VERSION: u32 = 2;
+/// convex physical fit of issue 30, whose results differ from the first fit's; 3: springs
+/// kept within the effort limit over the joint's range).
+const IDENTIFICATION_KEY_VERSION: u32 = 3;
 
 /// An identification of the scenario's arm, and the file the loop loads it from.
 pub struct IdentifiedNominal {

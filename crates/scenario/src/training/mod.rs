@@ -43,6 +43,21 @@ pub(crate) type SimulateData<'a> =
         &RunOptions,
     ) -> Result<(Vec<String>, Option<TimeSeries>), ScenarioError>;
 
+/// Free-motion data named by the scenario at `key` (a data scenario, simulated now or
+/// recalled, or a CSV), with the arm's joints in chain order.
+pub(crate) fn free_motion_data(
+    ctx: &Ctx<'_>,
+    scenario_file: &Path,
+    key: &'static str,
+    given: &Path,
+    arm_joints: &[String],
+    options: &RunOptions,
+    simulate: SimulateData<'_>,
+) -> Result<std::sync::Arc<crate::FreeMotionData>, ScenarioError> {
+    let source = data_source(ctx, scenario_file, key, given)?;
+    load_data(ctx, &source, arm_joints, options, simulate)
+}
+
 /// A network ready for an observer, with how it was obtained.
 #[derive(Clone, Debug)]
 pub struct TrainedNetwork {

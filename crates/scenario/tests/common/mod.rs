@@ -45,3 +45,12 @@ pub fn per_joint(run: &VariantRun, key: &str) -> Vec<f64> {
         })
         .collect()
 }
+
+/// A column of a variant's time series (panics, naming it, when missing).
+pub fn column(run: &VariantRun, name: &str) -> Vec<f64> {
+    let c = run
+        .series
+        .column(name)
+        .unwrap_or_else(|| panic!("no column {name}"));
+    run.series.rows.iter().map(|r| r[c]).collect()
+}

@@ -6,7 +6,7 @@
 //! (`admittance run scenarios/hand_contact.toml --out runs/hand_contact`).
 
 use crate::common;
-use common::{metric, number, per_joint, scenario_path};
+use common::{column, metric, number, per_joint, scenario_path};
 
 use admittance_scenario::{run_variant, RunOptions, ScenarioSource, VariantRun};
 
@@ -15,14 +15,6 @@ fn run(variant: &str) -> VariantRun {
     let source = ScenarioSource::load(&path).unwrap();
     run_variant(&source, &path, Some(variant), &RunOptions::default())
         .unwrap_or_else(|e| panic!("{variant}: {e}"))
-}
-
-fn column(run: &VariantRun, name: &str) -> Vec<f64> {
-    let c = run
-        .series
-        .column(name)
-        .unwrap_or_else(|| panic!("no column {name}"));
-    run.series.rows.iter().map(|r| r[c]).collect()
 }
 
 #[test]

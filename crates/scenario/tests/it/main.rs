@@ -5,8 +5,10 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod contact;
 mod excitation_trajectory;
 mod gains_and_health;
+mod gates;
 mod hand_contact;
 mod learned_observers;
 mod observer_scenarios;

@@ -8,6 +8,8 @@
 //! integrator = "rk4_split"          # or "semi_implicit_euler"
 //! inertia_scale = 1.2               # the true arm is 20 % heavier than the nominal one
 //! effort_limit_scale = 1.0
+//! hold_mass_matrix = false          # approximations for speed, off by default
+//! newton_tolerance = 1e-12          # (accuracy: docs/benchmarks.md, "Closed loop")
 //! initial_q = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5]
 //!
 //! [[friction]]
@@ -91,6 +93,17 @@ pub struct PlantConfig {
     pub initial_q: Vec<f64>,
     /// Initial joint velocities in chain order; empty means all zero.
     pub initial_qdot: Vec<f64>,
+    /// An approximation for speed, off by default: the mass matrix `M(q)` is computed at
+    /// the first plant step of each control period and held over the period's other steps
+    /// (the bias `C qdot + G` is still computed at every step). Its accuracy against the
+    /// exact plant and its speed are in docs/benchmarks.md ("Closed loop").
+    pub hold_mass_matrix: bool,
+    /// The implicit friction solve's Newton iteration stops once a step is at most this
+    /// times the velocity scale `max(1, |qdot|)` (rad/s). Default 1e-12 (the exact plant);
+    /// larger values, up to 1e-3, save iterations (near the solution the remaining error is
+    /// about the square of the last step): an approximation for speed, measured in
+    /// docs/benchmarks.md ("Closed loop").
+    pub newton_tolerance: f64,
 }
 
 impl Default for PlantConfig {
@@ -112,6 +125,8 @@ impl Default for PlantConfig {
             sensors: SensorConfig::default(),
             initial_q: Vec::new(),
             initial_qdot: Vec::new(),
+            hold_mass_matrix: false,
+            newton_tolerance: crate::plant::implicit::DEFAULT_STEP_TOLERANCE,
         }
     }
 }
@@ -325,6 +340,15 @@ impl PlantConfig {
             }
         }
         positive(|| "effort_limit_scale".into(), self.effort_limit_scale)?;
+        if !(self.newton_tolerance > 0.0 && self.newton_tolerance <= 1e-3) {
+            return Err(SimError::config(
+                "newton_tolerance",
+                format!(
+                    "must be in (0, 1e-3], got {} (default 1e-12: the exact plant)",
+                    self.newton_tolerance
+                ),
+            ));
+        }
         for (k, f) in self.friction.iter().enumerate() {
             joint_selection(model, || format!("friction[{k}].joint"), &f.joint)?;
             non_negative(|| format!("friction[{k}].viscous"), f.viscous)?;

@@ -31,6 +31,9 @@ const MAX_ITERATIONS: u32 = 60;
 /// Halvings tried by the line search before giving up (the current iterate is then
 /// accurate to rounding).
 const MAX_HALVINGS: u32 = 60;
+/// The default [`ImplicitSolver::set_step_tolerance`]: Newton stops once a step is at most
+/// this fraction of the velocity scale `max(1, |v + dv|)` (rad/s).
+pub(crate) const DEFAULT_STEP_TOLERANCE: f64 = 1e-12;
 
 /// Outcome of one implicit solve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -58,6 +61,8 @@ pub(crate) struct ImplicitSolver {
     torque_valid: bool,
     delta: Vec<f64>,
     trial: Vec<f64>,
+    /// Newton stops once a step is at most this times the velocity scale.
+    step_tolerance: f64,
 }
 
 impl ImplicitSolver {
@@ -74,7 +79,15 @@ impl ImplicitSolver {
             torque_valid: false,
             delta: vec![0.0; n],
             trial: vec![0.0; n],
+            step_tolerance: DEFAULT_STEP_TOLERANCE,
         }
+    }
+
+    /// Newton stops once a step is at most `tol` times the velocity scale (the plant's
+    /// `newton_tolerance`). Near the solution the error after a step is about the square of
+    /// the step's, so a step of `tol` leaves an error of order `tol^2`.
+    pub(crate) fn set_step_tolerance(&mut self, tol: f64) {
+        self.step_tolerance = tol;
     }
 
     /// `phi(v + dv)` at the last solve's `dv`, when that solve was nonlinear and succeeded
@@ -211,7 +224,7 @@ impl ImplicitSolver {
                 .iter()
                 .zip(v)
                 .fold(1.0_f64, |m, (d, v)| m.max((v + d).abs()));
-            if step <= 1e-12 * scale || gnorm2.sqrt() <= 1e-14 * g0 {
+            if step <= self.step_tolerance * scale || gnorm2.sqrt() <= 1e-14 * g0 {
                 break;
             }
         }

@@ -29,8 +29,8 @@ pub(crate) mod linalg;
 pub(crate) mod spring;
 
 use admittance_dynamics::{
-    aba, crba, kinetic_energy, mass_matrix_and_bias, nonlinear_effects, potential_energy, Data,
-    Model, Payload,
+    aba, bias_and_gravity, crba, kinetic_energy, mass_matrix_and_bias, nonlinear_effects,
+    potential_energy, Data, Model, Payload,
 };
 use nalgebra::{Matrix3, Vector3};
 
@@ -150,9 +150,14 @@ pub(crate) struct Dynamics {
     pub r: Vec<f64>,
     /// `M(q) + diag(M_E)`, row-major.
     pub mat: Vec<f64>,
-    /// `M` at the state's `q`, row-major, valid while `mass_valid`.
+    /// `M` at the state's `q`, row-major, valid while `mass_valid` (or, held, while
+    /// `mass_held`).
     pub m_state: Vec<f64>,
     pub mass_valid: bool,
+    /// [`PlantConfig::hold_mass_matrix`]: `m_state` is kept for the whole control period.
+    pub hold_mass: bool,
+    /// `m_state` holds this control period's `M` (only with `hold_mass`).
+    pub mass_held: bool,
     pub sys: SpdSystem,
     pub implicit: ImplicitSolver,
 }
@@ -189,7 +194,7 @@ impl Dynamics {
     #[inline]
     pub(crate) fn mass_matrix(&mut self, q: &[f64], state: bool) -> bool {
         let n = self.n;
-        if !(state && self.mass_valid) {
+        if !((state && self.mass_valid) || self.mass_held) {
             let Ok(m) = crba(&self.model, &mut self.data, q) else {
                 return false;
             };
@@ -198,6 +203,7 @@ impl Dynamics {
             if state {
                 self.m_state.copy_from_slice(&self.mat);
                 self.mass_valid = true;
+                self.mass_held = self.hold_mass;
             }
         } else {
             self.mat.copy_from_slice(&self.m_state);
@@ -221,14 +227,23 @@ impl Dynamics {
         }
         let n = self.n;
         let shared = self.spring_shares_gravity;
-        if mass_matrix_and_bias(&self.model, &mut self.data, q, v, shared).is_err() {
-            return false;
-        }
-        // Symmetric: row-major and column-major agree.
-        self.mat.copy_from_slice(self.data.mass_matrix.as_slice());
-        if state {
-            self.m_state.copy_from_slice(&self.mat);
-            self.mass_valid = true;
+        if self.mass_held {
+            // The period's M, the bias (and the spring's gravity) at this q.
+            if bias_and_gravity(&self.model, &mut self.data, q, v, shared).is_err() {
+                return false;
+            }
+            self.mat.copy_from_slice(&self.m_state);
+        } else {
+            if mass_matrix_and_bias(&self.model, &mut self.data, q, v, shared).is_err() {
+                return false;
+            }
+            // Symmetric: row-major and column-major agree.
+            self.mat.copy_from_slice(self.data.mass_matrix.as_slice());
+            if state {
+                self.m_state.copy_from_slice(&self.mat);
+                self.mass_valid = true;
+                self.mass_held = self.hold_mass;
+            }
         }
         for (i, me) in self.env.mass_diag().iter().enumerate() {
             self.mat[i * n + i] += me;
@@ -407,7 +422,7 @@ impl Plant {
         } else {
             config.initial_qdot.clone()
         };
-        let dynx = Dynamics {
+        let mut dynx = Dynamics {
             n,
             model,
             nominal: nominal_for_spring,
@@ -427,9 +442,12 @@ impl Plant {
             mat: vec![0.0; n * n],
             m_state: vec![0.0; n * n],
             mass_valid: false,
+            hold_mass: config.hold_mass_matrix,
+            mass_held: false,
             sys: SpdSystem::new(n),
             implicit: ImplicitSolver::new(n),
         };
+        dynx.implicit.set_step_tolerance(config.newton_tolerance);
         let vec4 = || [vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         Ok(Self {
             dynx,
@@ -557,6 +575,7 @@ impl Plant {
         self.steps = 0;
         self.dynx.env.reset();
         self.dynx.mass_valid = false;
+        self.dynx.mass_held = false;
         self.record = StepRecord::new(self.dynx.n);
         self.counters = PlantCounters::default();
     }
@@ -575,6 +594,7 @@ impl Plant {
         self.q.copy_from_slice(q);
         self.v.copy_from_slice(qdot);
         self.dynx.mass_valid = false;
+        self.dynx.mass_held = false;
         Ok(())
     }
 
@@ -616,6 +636,7 @@ impl Plant {
     /// Does not allocate; a non-finite command value is taken as zero and reported.
     pub fn step(&mut self, tau: &[f64]) -> Result<&StepRecord, SimError> {
         check_len("tau", tau, self.dynx.n)?;
+        self.dynx.mass_held = false;
         self.step_inner(tau);
         Ok(&self.record)
     }
@@ -624,6 +645,8 @@ impl Plant {
     /// Returns the record of the last plant step.
     pub fn step_control(&mut self, tau: &[f64]) -> Result<&StepRecord, SimError> {
         check_len("tau", tau, self.dynx.n)?;
+        // A held mass matrix is computed at the period's first step.
+        self.dynx.mass_held = false;
         for _ in 0..self.substeps {
             self.step_inner(tau);
         }
@@ -683,6 +706,7 @@ impl Plant {
             rec.tau_friction.fill(0.0);
             rec.tau_spring.fill(0.0);
             self.dynx.mass_valid = false;
+            self.dynx.mass_held = false;
         }
     }
 }

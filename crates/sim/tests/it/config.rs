@@ -152,6 +152,12 @@ fn invalid_values_name_their_key() {
         (invalid(|c| c.control_rate_hz = 0.0), "control_rate_hz"),
         (invalid(|c| c.rate_hz = 2500.0), "rate_hz"),
         (invalid(|c| c.inertia_scale = 0.0), "inertia_scale"),
+        (invalid(|c| c.newton_tolerance = 0.0), "newton_tolerance"),
+        (invalid(|c| c.newton_tolerance = 0.01), "newton_tolerance"),
+        (
+            invalid(|c| c.newton_tolerance = f64::NAN),
+            "newton_tolerance",
+        ),
         (
             invalid(|c| c.effort_limit_scale = f64::NAN),
             "effort_limit_scale",

@@ -101,6 +101,7 @@ fn a_nan_sample_is_passed_on_raw_but_the_derived_signals_hold() {
             joints: vec![],
             t_start: 0.05,
             t_end: 0.0515,
+            value: None,
         }],
         ..Default::default()
     };
@@ -136,6 +137,7 @@ fn a_stale_sample_repeats_the_previous_value_with_its_old_timestamp() {
             joints: vec!["j".into()],
             t_start: 0.0095,
             t_end: 0.0125,
+            value: None,
         }],
         ..Default::default()
     };
@@ -164,4 +166,81 @@ fn sensors_reject_a_bad_length() {
         s.sample(0.0, &[0.0, 1.0], &[0.0]),
         Err(SimError::Dimension(_))
     ));
+}
+
+#[test]
+fn a_spike_delivers_its_absurd_reading_once_and_a_screen_can_refuse_it() {
+    let cfg = SensorConfig {
+        faults: vec![
+            FaultConfig {
+                kind: FaultKind::AngleSpike,
+                t_start: 0.0195,
+                t_end: 0.0205,
+                ..Default::default()
+            },
+            FaultConfig {
+                kind: FaultKind::TorqueSpike,
+                t_start: 0.0295,
+                t_end: 0.0305,
+                value: Some(1e300),
+                ..Default::default()
+            },
+        ],
+        ..Default::default()
+    };
+    let mut plain = sensors(cfg.clone(), 1000.0);
+    let mut screened = sensors(cfg, 1000.0);
+    for k in 0..40 {
+        let t = k as f64 * 1e-3;
+        let m = plain.sample(t, &[0.1], &[2.0]).unwrap();
+        assert_eq!(m.q[0], if k == 20 { DEFAULT_SPIKE_VALUE } else { 0.1 });
+        assert_eq!(m.tau_commanded[0], if k == 30 { 1e300 } else { 2.0 });
+        let mut refused = 0;
+        let m = screened
+            .sample_screened(t, &[0.1], &[2.0], |_, q, tau| {
+                for x in q.iter_mut().chain(tau.iter_mut()) {
+                    if x.abs() > 10.0 {
+                        *x = f64::NAN;
+                        refused += 1;
+                    }
+                }
+            })
+            .unwrap();
+        assert_eq!(refused, usize::from(k == 20 || k == 30), "sample {k}");
+        // A refused value takes the NaN path: the derived signals hold.
+        assert!(
+            (m.q_filtered[0] - 0.1).abs() < 1e-9 && m.qdot[0].abs() < 1e-6,
+            "sample {k}: {} {}",
+            m.q_filtered[0],
+            m.qdot[0]
+        );
+        assert!((m.tau_filtered[0] - 2.0).abs() < 1e-9, "sample {k}");
+        assert_eq!(m.q[0].is_nan(), k == 20);
+    }
+}
+
+#[test]
+fn a_spike_value_is_finite_and_only_for_spikes() {
+    let model = one_joint(1e-3);
+    for (kind, value) in [
+        (FaultKind::AngleSpike, f64::INFINITY),
+        (FaultKind::TorqueSpike, f64::NAN),
+        (FaultKind::Nan, 1.0),
+        (FaultKind::Stale, 1.0),
+    ] {
+        let cfg = SensorConfig {
+            faults: vec![FaultConfig {
+                kind,
+                value: Some(value),
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let err = Sensors::new(&model, &cfg, 1000.0).unwrap_err();
+        assert_eq!(
+            err.key(),
+            Some("sensors.faults[0].value"),
+            "{kind:?}: {err}"
+        );
+    }
 }

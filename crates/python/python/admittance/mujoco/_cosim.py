@@ -5,7 +5,10 @@ What is Python here is the MuJoCo plant, the contact, the truth and the orchestr
 variant steps the Rust loop (``adm.ClosedLoop``: sensor filter, observer stage with its
 input filter, low-pass and warm-up, admittance model, PD), its metrics and health checks
 (divergence) are the scenario runner's (``adm.VariantRecorder``), and its run folder is
-written by the same Rust code as ``admittance run``'s (``adm.write_run_folder``)."""
+written by the same Rust code as ``admittance run``'s (``adm.write_run_folder``). A
+variant's control steps run in Rust (``adm.CosimStepper``, which calls MuJoCo's
+``mj_step`` through its Python bindings), the same values as the Python loop
+``run_variant_stepwise`` (issue 33, part 3)."""
 
 from __future__ import annotations
 
@@ -114,10 +117,12 @@ def _multisine(m, q0, rng, duration, dt, spread=0.6):
     amps, periods, phases = map(np.array, (amps, periods, phases))
 
     def at(t):
+        # t: a time, or a vector of times (then one row per time).
+        t = np.asarray(t, dtype=float)[..., None, None]
         w = 2 * math.pi / periods
-        s = q0 + np.sum(amps * np.sin(w * t + phases), axis=1)
-        v = np.sum(amps * w * np.cos(w * t + phases), axis=1)
-        a = -np.sum(amps * w * w * np.sin(w * t + phases), axis=1)
+        s = q0 + np.sum(amps * np.sin(w * t + phases), axis=-1)
+        v = np.sum(amps * w * np.cos(w * t + phases), axis=-1)
+        a = -np.sum(amps * w * w * np.sin(w * t + phases), axis=-1)
         return s, v, a
 
     return at
@@ -141,17 +146,19 @@ def _excitation(m, rng, duration, dt):
     per = len(q) - 1
 
     def at(t):
-        k = int(round(t / dt))
-        k = k % per if period < duration else min(k, per)
+        # t: a time, or a vector of times (then one row per time); rint: round()'s ties.
+        k = np.rint(np.asarray(t, dtype=float) / dt).astype(np.int64)
+        k = k % per if period < duration else np.minimum(k, per)
         return q[k], v[k], a[k]
 
     return at
 
 
-def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration):
+def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration, stepwise=False):
     """Free motion under PD + nominal gravity on the excitation (``cfg.training_motion``:
     ``"excitation"``, the default, or ``"multisine"``): the sensor signals, as a dict for
-    ``adm.train``."""
+    ``adm.train``. The steps run in Rust (``adm.FreeMotionStepper``, a simulated second per
+    call), or with ``stepwise`` as a Python loop (``_record_stepwise``, the same values)."""
     n = m.n
     steps = int(round(duration / cfg.dt))
     motion = getattr(cfg, "training_motion", "excitation")
@@ -162,13 +169,34 @@ def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration):
     else:
         raise ValueError(f"training_motion {motion!r}: choose \"excitation\" or \"multisine\"")
     arm.set_q(desired(0.0)[0])
+    rows = {k: np.zeros((steps, n)) for k in ("q", "qdot", "qddot", "tau")}
+    t_col = np.arange(steps) * cfg.dt
+    label = f"free motion: {duration:.0f} s in MuJoCo"
+    if stepwise:
+        _record_stepwise(arm, m, pd_config, cfg, rng, desired, rows, steps, label)
+    else:
+        encoder = Encoder()
+        stepper = adm.FreeMotionStepper(
+            m, pd_config, arm.stepper_plant(), dt=cfg.dt, sensor_cutoff_hz=cfg.sensor_cutoff_hz,
+            rate_hz=1.0 / cfg.dt, resolution=encoder.resolution, out=rows,
+        )
+        for start in _progress.steps(range(0, steps, STEPPER_CHUNK), label):
+            end = min(start + STEPPER_CHUNK, steps)
+            # The plan of this stretch, as the Python loop computes it step by step.
+            q_d, qdot_d, qddot_d = (np.ascontiguousarray(x) for x in desired(t_col[start:end]))
+            stepper.run(start, q_d, qdot_d, qddot_d, encoder.noise(rng, end - start, n))
+    data = {"t": t_col, **rows}
+    return data
+
+
+def _record_stepwise(arm, m, pd_config, cfg, rng, desired, rows, steps, label):
+    """``record_free_motion``'s steps as a Python loop, into ``rows``."""
+    n = m.n
     ctl = adm.PdController(m, pd_config)
     sensors = Sensors(n, cfg, rng)
     tau = np.zeros(n)
-    rows = {k: np.zeros((steps, n)) for k in ("q", "qdot", "qddot", "tau")}
-    t_col = np.arange(steps) * cfg.dt
     zeros = np.zeros(n)
-    for k in _progress.steps(range(steps), f"free motion: {duration:.0f} s in MuJoCo"):
+    for k in _progress.steps(range(steps), label):
         t = k * cfg.dt
         q, qdot, qddot, tau_f = sensors.sample(arm.q(), tau)
         rows["q"][k], rows["qdot"][k], rows["qddot"][k], rows["tau"][k] = q, qdot, qddot, tau_f
@@ -177,8 +205,6 @@ def record_free_motion(arm, m, q0, pd_config, cfg, rng, duration):
         arm.step(tau)
         if not np.all(np.isfinite(arm.q())):
             raise RuntimeError(f"the free-motion recording diverged at t = {t:.3f} s")
-    data = {"t": t_col, **rows}
-    return data
 
 
 def home_pose(m):
@@ -300,10 +326,17 @@ def loop_config(variant, cfg, m, q0, pd, identification_file=None):
     }
 
 
-def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification_file=None):
+#: Control steps per call into ``adm.CosimStepper`` (one simulated second at 1 kHz): the
+#: progress bar and Ctrl-C get a turn between calls.
+STEPPER_CHUNK = 1000
+
+
+def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification_file=None, stepwise=False):
     """One variant of the admittance experiment: the Rust loop against the MuJoCo arm, every
-    step gathered by a ``VariantRecorder``; returns the finished recorder and the wall time
-    (s) of the stepping."""
+    step gathered by a ``VariantRecorder``; returns the finished recorder and the wall and
+    this thread's CPU time (s) of the stepping. The steps run in Rust (``adm.CosimStepper``: the same values as
+    the Python loop, one call per second simulated), or with ``stepwise`` one Python
+    iteration per step (``run_variant_stepwise``, the reference the tests compare with)."""
     n = m.n
     dt = cfg.dt
     steps = int(round(cfg.duration / dt))
@@ -313,13 +346,27 @@ def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification
     net = nets.get(variant)
     closed_loop = adm.ClosedLoop(m, config, net, sensor_cutoff_hz=cfg.sensor_cutoff_hz)
     recorder = adm.VariantRecorder(variant, m, config, cfg.duration, EVALUATION_START, DECIMATION)
-    encoder = Encoder()
     desired = experiment_motion(q0)
     arm.set_q(q0)
-    tau_ext = np.zeros(n)  # MuJoCo's external torque of the last step (the oracle's input)
-    out = (np.zeros(n), np.zeros(n))
-    started = time.perf_counter()
-    for k in _progress.steps(range(steps), f"{variant}: {cfg.duration:.0f} s with the admittance loop"):
+    label = f"{variant}: {cfg.duration:.0f} s with the admittance loop"
+    started, cpu_started = time.perf_counter(), time.thread_time()
+    if stepwise:
+        run_variant_stepwise(closed_loop, recorder, arm, desired, contact, rng, steps, dt, label)
+    else:
+        _run_in_rust(closed_loop, recorder, arm, desired, contact, rng, steps, dt, n, label)
+    seconds, cpu_seconds = time.perf_counter() - started, time.thread_time() - cpu_started
+    recorder.finish(closed_loop, net)
+    return recorder, seconds, cpu_seconds
+
+
+def run_variant_stepwise(closed_loop, recorder, arm, desired, contact, rng, steps, dt, label):
+    """The variant's control steps as a Python loop: read the encoder, step the loop, apply
+    the command and the push, step MuJoCo, gather (what ``adm.CosimStepper`` does in
+    Rust)."""
+    encoder = Encoder()
+    tau_ext = np.zeros(closed_loop.n)  # MuJoCo's external torque of the last step (the oracle's input)
+    out = (np.zeros(closed_loop.n), np.zeros(closed_loop.n))
+    for k in _progress.steps(range(steps), label):
         t = k * dt
         q_d, qdot_d, qddot_d = desired(t)
         # The command held over the period that just ended is the loop's own (tau=None).
@@ -329,17 +376,41 @@ def run_variant(variant, arm, m, nets, q0, pd, cfg, rng, contact, identification
         tau_ext = arm.step(tau, force)
         if recorder.add(closed_loop, arm.q(), arm.qdot(), tau_ext) is not None:
             break  # diverged: the scenario runner's health rules
-    seconds = time.perf_counter() - started
-    recorder.finish(closed_loop, net)
-    return recorder, seconds
 
 
-def variant_metrics(recorder, seconds):
+def _run_in_rust(closed_loop, recorder, arm, desired, contact, rng, steps, dt, n, label):
+    """The control steps through ``adm.CosimStepper``: the desired motion, the encoder's
+    noise and the push planned for every step with the stepwise loop's own expressions
+    (``desired`` on a column of times, the noise drawn in one go, ``contact.push(t)``), then
+    the steps in Rust a second at a time."""
+    encoder = Encoder()
+    times = np.arange(steps) * dt
+    q_d, qdot_d, qddot_d = (np.ascontiguousarray(np.broadcast_to(a, (steps, n))) for a in desired(times[:, None]))
+    push = np.zeros((steps, 3))
+    push_on = [False] * steps
+    if contact.push is not None:
+        for k in range(steps):
+            f = contact.push(k * dt)
+            if f is not None:
+                push[k], push_on[k] = f, True
+    stepper = adm.CosimStepper(
+        closed_loop, recorder, arm.stepper_plant(), dt=dt, q_d=q_d, qdot_d=qdot_d, qddot_d=qddot_d,
+        noise=encoder.noise(rng, steps, n), resolution=encoder.resolution, push=push, push_on=push_on,
+    )
+    for start in _progress.steps(range(0, steps, STEPPER_CHUNK), label):
+        if stepper.run(start, min(start + STEPPER_CHUNK, steps)) is not None:
+            break  # diverged: the scenario runner's health rules
+
+
+def variant_metrics(recorder, seconds, cpu_seconds):
     """The variant's metrics (the scenario runner's, computed in Rust) and the speed of its
-    co-simulation."""
+    co-simulation: by the wall clock, and by the stepping thread's CPU time (``cosim_cpu_*``;
+    on a shared machine the wall clock counts other processes' turns too)."""
     metrics = dict(recorder.metrics)
     metrics["cosim_seconds"] = seconds
     metrics["cosim_steps_per_second"] = recorder.steps / max(seconds, 1e-9)
+    metrics["cosim_cpu_seconds"] = cpu_seconds
+    metrics["cosim_cpu_steps_per_second"] = recorder.steps / max(cpu_seconds, 1e-9)
     return metrics
 
 
@@ -491,16 +562,16 @@ def run_cosimulation(cfg: CosimConfig, log=print):
         nets.identification.save(str(identification_file))
     for variant in cfg.variants:
         arm = MujocoArm(urdf_text, m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale, contact.wall)
-        recorder, seconds = run_variant(
+        recorder, seconds, cpu_seconds = run_variant(
             variant, arm, m, nets, q0, pd, cfg, np.random.default_rng(cfg.seed + 7), contact, identification_file
         )
-        metrics = variant_metrics(recorder, seconds)
+        metrics = variant_metrics(recorder, seconds, cpu_seconds)
         recorders.append(recorder)
-        speed[variant] = {k: metrics[k] for k in ("cosim_seconds", "cosim_steps_per_second")}
+        speed[variant] = {k: v for k, v in metrics.items() if k.startswith("cosim_")}
         log(
             f"{variant}: external-torque NRMSE {metrics['external_torque_nrmse']}, bound violations "
             f"{metrics['reference_bound_violations']}, {recorder.steps} steps in {seconds:.1f} s "
-            f"({metrics['cosim_steps_per_second']:.0f} steps/s)"
+            f"({metrics['cosim_steps_per_second']:.0f} steps/s; {metrics['cosim_cpu_steps_per_second']:.0f} per CPU second)"
         )
     settings = {k: v for k, v in asdict(cfg).items() if v is not None and k not in ("force",)}
     extra = {

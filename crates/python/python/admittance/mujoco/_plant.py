@@ -82,10 +82,20 @@ class Encoder:
     counts: float = 65536.0
     noise_std: float = 5e-5
 
+    @property
+    def resolution(self):
+        """One count (rad)."""
+        return 2.0 * math.pi / self.counts
+
     def read(self, q, rng):
-        resolution = 2.0 * math.pi / self.counts
+        resolution = self.resolution
         noisy = q + self.noise_std * rng.standard_normal(q.shape)
         return np.round(noisy / resolution) * resolution
+
+    def noise(self, rng, steps, n):
+        """The noise of ``steps`` reads of ``n`` angles, drawn as ``read`` draws them one
+        read after the other (``adm.CosimStepper`` adds it and rounds)."""
+        return self.noise_std * rng.standard_normal((steps, n))
 
 
 class MujocoArm:
@@ -122,6 +132,23 @@ class MujocoArm:
         self.gravity = np.array(self.model.opt.gravity)
         self.jacp = np.zeros((3, self.model.nv))
         self.jacr = np.zeros((3, self.model.nv))
+
+    def stepper_plant(self):
+        """The model, data, arrays and indices ``adm.CosimStepper`` steps this arm with
+        (what ``step`` and ``external_torque`` use); ``contact_torque``: this arm's
+        ``external_torque``, which the stepper calls on steps with contacts, or ``None``
+        when nothing can touch the arm (no geometry: no wall)."""
+        m, d = self.model, self.data
+        return {
+            "mj_step": self.mj.mj_step, "mj_jac": self.mj.mj_jac, "model": m, "data": d,
+            "nq": m.nq, "nv": m.nv, "nbody": m.nbody,
+            "qpos": d.qpos, "qvel": d.qvel, "qfrc_applied": d.qfrc_applied,
+            "xfrc_applied": d.xfrc_applied, "xpos": d.xpos, "xipos": d.xipos,
+            "tip_xpos": d.xpos[self.tip_body], "jacp": self.jacp, "jacr": self.jacr,
+            "qpos_index": [int(i) for i in self.qpos], "dof_index": [int(i) for i in self.dofs],
+            "tip_body": int(self.tip_body),
+            "contact_torque": self.external_torque if m.ngeom > 0 else None,
+        }
 
     def set_q(self, q):
         self.data.qpos[self.qpos] = q
