@@ -419,25 +419,32 @@ impl Bridge {
 }
 
 /// The contact flags of a step (issue 31), when the loop has a contact floor: a
-/// `std_msgs/msg/Float64MultiArray` `[contact, collision, link]`: 1 or 0, 1 or 0, and the
-/// last loaded joint (from 0, in chain order; -1 when none), its layout's one dimension
-/// labelled `contact,collision,link`. The message has no header: one is published per
-/// torque message, after it.
-pub fn contact_message(status: &RobotStatus) -> Option<Float64MultiArray> {
+/// `std_msgs/msg/Float64MultiArray` `[contact, collision, link, fx, fy, fz, mx, my, mz]`: 1
+/// or 0, 1 or 0, the last loaded joint (from 0, in chain order; -1 when none), then the
+/// wrench at that joint's child link in the base axes (`RobotLoop::contact_wrench`: N, then
+/// N m about the link's origin; zero without a contact), its layout's one dimension labelled
+/// with those names. The message has no header: one is published per torque message, after
+/// it.
+pub fn contact_message(status: &RobotStatus, wrench: Option<&[f64]>) -> Option<Float64MultiArray> {
     let c = status.contact?;
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    let mut data = vec![flag(c.contact), flag(c.collision), f64::from(c.link)];
+    data.extend((0..6).map(|k| wrench.and_then(|w| w.get(k)).copied().unwrap_or(0.0)));
     Some(Float64MultiArray {
         layout: MultiArrayLayout {
             dim: vec![MultiArrayDimension {
-                label: "contact,collision,link".into(),
-                size: 3,
-                stride: 3,
+                label: CONTACT_LABEL.into(),
+                size: 9,
+                stride: 9,
             }],
             data_offset: 0,
         },
-        data: vec![flag(c.contact), flag(c.collision), f64::from(c.link)],
+        data,
     })
 }
+
+/// The label of the contact message's dimension: what each value is.
+pub const CONTACT_LABEL: &str = "contact,collision,link,fx,fy,fz,mx,my,mz";
 
 /// The message types the bridge publishes (for the node and the docs).
 pub const OUTPUT_TYPES: [&str; 3] = [JOINT_STATE, WRENCH_STAMPED, FLOAT64_MULTI_ARRAY];

@@ -77,7 +77,8 @@ pub struct BridgeArgs {
     /// Axes of the wrench: the base link's or the tip link's (its frame_id).
     #[arg(long, value_enum, default_value = "base")]
     pub wrench_frame: WrenchFrame,
-    /// Topic of the contact flags (Float64MultiArray `[contact, collision, link]`, issue 31),
+    /// Topic of the contact flags and the touched link's wrench (Float64MultiArray
+    /// `[contact, collision, link, fx, fy, fz, mx, my, mz]`, issue 31),
     /// published when the deployment has a contact floor (`[contact] floor`).
     #[arg(long, default_value = "/admittance/contact")]
     pub contact_topic: String,

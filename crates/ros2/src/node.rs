@@ -158,7 +158,8 @@ pub struct BridgeTopics {
     pub wrench_topic: String,
     /// The admittance model's compliant reference (JointState position, velocity), if wanted.
     pub reference_topic: Option<String>,
-    /// Contact flags (Float64MultiArray `[contact, collision, link]`), published when the
+    /// Contact flags and the touched link's wrench (Float64MultiArray
+    /// `[contact, collision, link, fx, fy, fz, mx, my, mz]`), published when the
     /// loop has a contact floor.
     pub contact_topic: String,
     /// Stop after this long (none: until SIGINT or SIGTERM).
@@ -256,7 +257,8 @@ pub fn run_bridge(
                     if let Some(p) = &reference_pub {
                         ok &= p.publish(bridge.reference_message(&header)).is_ok();
                     }
-                    if let Some(flags) = contact_message(&stepped.status) {
+                    let wrench = bridge.rust_loop().contact_wrench().map(|(base, _)| base);
+                    if let Some(flags) = contact_message(&stepped.status, wrench) {
                         ok &= contact_pub.publish(flags).is_ok();
                     }
                     let done_wall = wall_ns();

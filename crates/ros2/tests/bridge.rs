@@ -235,16 +235,20 @@ fn contact_flags_are_published_only_with_a_contact_floor() {
     let mut bridge = Bridge::new(&config("franka")).unwrap();
     let stepped = bridge.process(&messages(1, &chain())[0]).unwrap();
     assert!(!bridge.rust_loop().has_contact_floor());
-    assert!(contact_message(&stepped.status).is_none());
-    // With flags: [contact, collision, link] and the layout's label.
+    assert!(contact_message(&stepped.status, None).is_none());
+    // With flags: [contact, collision, link, wrench at the link] and the layout's label.
     let mut status = stepped.status;
     status.contact = Some(admittance_loop::ContactState {
         contact: true,
         collision: false,
         link: 4,
     });
-    let m = contact_message(&status).unwrap();
-    assert_eq!(m.data, [1.0, 0.0, 4.0]);
-    assert_eq!(m.layout.dim[0].label, "contact,collision,link");
-    assert_eq!(m.values().unwrap().len(), 3);
+    let wrench = [1.0, 2.0, 3.0, 0.1, 0.2, 0.3];
+    let m = contact_message(&status, Some(&wrench)).unwrap();
+    assert_eq!(m.data, [1.0, 0.0, 4.0, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3]);
+    assert_eq!(
+        m.layout.dim[0].label,
+        "contact,collision,link,fx,fy,fz,mx,my,mz"
+    );
+    assert_eq!(m.values().unwrap().len(), 9);
 }
