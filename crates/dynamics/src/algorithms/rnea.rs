@@ -74,11 +74,7 @@ pub fn mass_matrix_and_bias(
     check_len("v", v, n)?;
     update_joint_placements(model, data, q);
     crate::algorithms::crba::crba_pass_composite(model, data);
-    rnea_pass_at_placements(model, data, Some(v), None, None);
-    data.nonlinear_effects.copy_from(&data.tau);
-    if gravity {
-        gravity_pass(model, data);
-    }
+    bias_at_placements(model, data, v, gravity);
     Ok(())
 }
 
@@ -97,12 +93,18 @@ pub fn bias_and_gravity(
     check_len("q", q, n)?;
     check_len("v", v, n)?;
     update_joint_placements(model, data, q);
+    bias_at_placements(model, data, v, gravity);
+    Ok(())
+}
+
+/// `C(q, v) v + G(q)` (and `G(q)` when `gravity`) on `data.joint_placements` as they are.
+#[inline(always)]
+fn bias_at_placements(model: &Model, data: &mut Data, v: &[f64], gravity: bool) {
     rnea_pass_at_placements(model, data, Some(v), None, None);
     data.nonlinear_effects.copy_from(&data.tau);
     if gravity {
         gravity_pass(model, data);
     }
-    Ok(())
 }
 
 /// `G(q)` on `data.joint_placements` as they are.

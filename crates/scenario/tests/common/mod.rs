@@ -54,3 +54,20 @@ pub fn column(run: &VariantRun, name: &str) -> Vec<f64> {
         .unwrap_or_else(|| panic!("no column {name}"));
     run.series.rows.iter().map(|r| r[c]).collect()
 }
+
+/// Records a data scenario of `scenarios/`, shortened to `seconds`, into
+/// `dir/free_motion.csv`.
+pub fn record(name: &str, seconds: f64, dir: &std::path::Path) -> std::path::PathBuf {
+    admittance_scenario::run_scenario(
+        &scenario_path(name),
+        dir,
+        None,
+        &[format!("duration={seconds}")],
+        &admittance_scenario::RunOptions::default(),
+        false,
+        |_, _, _| {},
+        |_| Ok(()),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    dir.join("free_motion.csv")
+}

@@ -6,10 +6,9 @@
 //! learned residual). Without spikes the gates do not fire on these runs.
 
 use crate::common;
-use common::{metric, number, scenario_path};
-use std::path::Path;
+use common::{metric, number, record, scenario_path};
 
-use admittance_scenario::{run_scenario, run_variant, RunOptions, ScenarioSource, VariantRun};
+use admittance_scenario::{run_variant, RunOptions, ScenarioSource, VariantRun};
 use serde_json::json;
 
 /// The spike's sample (s); the contact on s0 lasts from 1 s to the end (3.5 s).
@@ -122,22 +121,6 @@ fn spikes_are_refused_and_forgotten(variant: &str, extra: &[String], tolerance: 
 #[test]
 fn a_spike_is_gated_and_the_momentum_estimate_recovers_within_a_second() {
     spikes_are_refused_and_forgotten("momentum", &[], 0.02);
-}
-
-/// Records a data scenario, shortened to `seconds`, into `dir/free_motion.csv`.
-fn record(name: &str, seconds: f64, dir: &Path) -> String {
-    run_scenario(
-        &scenario_path(name),
-        dir,
-        None,
-        &[format!("duration={seconds}")],
-        &RunOptions::default(),
-        false,
-        |_, _, _| {},
-        |_| Ok(()),
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
-    dir.join("free_motion.csv").display().to_string()
 }
 
 /// The hybrid observer (momentum on the 20%-wrong URDF plus a residual network trained on

@@ -5,27 +5,11 @@
 //! The bars at full size are measured by the scenario itself (README).
 
 use crate::common;
-use common::{number, per_joint, scenario_path};
+use common::{number, per_joint, record, scenario_path};
 use std::path::{Path, PathBuf};
 
-use admittance_scenario::{run_scenario, run_variant, RunOptions, ScenarioSource};
+use admittance_scenario::{run_variant, RunOptions, ScenarioSource};
 use serde_json::Value;
-
-/// Records a data scenario, shortened to `seconds`, into `dir/free_motion.csv`.
-fn record(name: &str, seconds: f64, dir: &Path) -> PathBuf {
-    run_scenario(
-        &scenario_path(name),
-        dir,
-        None,
-        &[format!("duration={seconds}")],
-        &RunOptions::default(),
-        false,
-        |_, _, _| {},
-        |_| Ok(()),
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
-    dir.join("free_motion.csv")
-}
 
 fn source_with(overrides: &[String]) -> ScenarioSource {
     let mut source = ScenarioSource::load(&scenario_path("admittance.toml")).unwrap();
