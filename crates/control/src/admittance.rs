@@ -158,8 +158,9 @@ impl Saturation {
         if !(rho > 0.0 && rho < 1.0) {
             return Err(ConfigError::new(
                 "rho",
-                format!("is {rho}, must lie strictly between 0 and 1 (paper: 0.95)"),
-            ));
+                format!("is {rho}, must lie strictly between 0 and 1"),
+            )
+            .hint("the paper uses 0.95"));
         }
         let centre = config.centre.resolve("centre", n, Bound::Finite)?;
         let half_range = match &config.half_range {

@@ -60,6 +60,10 @@ impl LoopError {
     pub fn text(&self) -> String {
         match self {
             LoopError::Invalid { hint: Some(h), .. } => format!("{self}; hint: {h}"),
+            LoopError::Component { source, .. } => match &source.hint {
+                Some(h) => format!("{self}; hint: {h}"),
+                None => self.to_string(),
+            },
             _ => self.to_string(),
         }
     }

@@ -486,3 +486,24 @@ fn an_absurd_measured_velocity_is_flagged_and_not_integrated() {
         .fold(0.0, f64::max);
     assert!(gap < 0.5, "estimate off a clean run by {gap} N m");
 }
+
+/// Issue 32, item 5: a component's key and hint reach the loop's one-line text (what
+/// `adm_last_error`, Python and the command line show) under the component's table.
+#[test]
+fn a_components_key_and_hint_reach_the_loops_text() {
+    let config = RobotConfig::from_toml_with(
+        LOOP_TOML,
+        Path::new("loop.toml"),
+        &["admittance.saturation={ rho = 1.5, centre = 0.0, half_range = 1.0 }"],
+    )
+    .unwrap();
+    let e = RobotLoop::new(model(), &config, Path::new("."), None, None)
+        .err()
+        .expect("rho 1.5 is refused");
+    assert_eq!(e.key(), "admittance.saturation.rho", "{e}");
+    assert!(
+        e.text().ends_with("; hint: the paper uses 0.95"),
+        "{}",
+        e.text()
+    );
+}

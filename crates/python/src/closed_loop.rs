@@ -36,7 +36,10 @@ fn loop_error(context: &str, e: LoopError) -> PyErr {
             }
         }
         LoopError::Component { source, .. } => {
-            message.push_str(&format!("key `{key}`: {}", source.message))
+            message.push_str(&format!("key `{key}`: {}", source.message));
+            if let Some(h) = &source.hint {
+                message.push_str(&format!("; hint: {h}"));
+            }
         }
         other => message.push_str(&other.to_string()),
     }

@@ -288,7 +288,7 @@ pub fn value_error(message: impl Into<String>) -> PyErr {
 
 /// A configuration error of the control crate, under `context` (e.g. `NeuralController`).
 pub fn config_error(context: &str, e: admittance_control::ConfigError) -> PyErr {
-    PyValueError::new_err(format!("{context}: {e}"))
+    PyValueError::new_err(format!("{context}: {}", e.text()))
 }
 
 /// A dynamics error: a file that cannot be read is an `OSError`, anything else a

@@ -26,7 +26,10 @@ impl Ctx<'_> {
         } else {
             format!("{section}.{key}")
         };
-        let hint = "change the value so that it meets the stated bound (the file or --set)";
+        let hint = e
+            .hint
+            .as_deref()
+            .unwrap_or("change the value so that it meets the stated bound (the file or --set)");
         let mut err = self.err(&path, e.message.clone(), Some(hint));
         if e.key.contains('[') {
             err.key = Some(format!("{section}.{}", e.key));

@@ -40,18 +40,23 @@ impl Default for ContactCalibrationConfig {
 impl ContactCalibrationConfig {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let positive = |key: &str, v: f64| {
+        let positive = |key: &str, v: f64, hint: &str| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(ConfigError::new(
-                    key,
-                    format!("is {v}: must be finite and > 0"),
-                ))
+                Err(ConfigError::new(key, format!("is {v}: must be finite and > 0")).hint(hint))
             }
         };
-        positive("false_alarms_per_hour", self.false_alarms_per_hour)?;
-        positive("collision_rate_ratio", self.collision_rate_ratio)?;
+        positive(
+            "false_alarms_per_hour",
+            self.false_alarms_per_hour,
+            "false contact events per hour, all joints together (default 1)",
+        )?;
+        positive(
+            "collision_rate_ratio",
+            self.collision_rate_ratio,
+            "the collision rate as a fraction of the contact rate (default 0.01)",
+        )?;
         if !(self.collision_rate_ratio <= 1.0) {
             return Err(ConfigError::new(
                 "collision_rate_ratio",
@@ -206,8 +211,9 @@ fn check_data(
     if duration < MIN_DURATION_S {
         return Err(ConfigError::new(
             "estimates",
-            format!("cover {duration:.2} s: a floor needs at least {MIN_DURATION_S} s of free motion (minutes for a rate per hour)"),
-        ));
+            format!("cover {duration:.2} s: a floor needs at least {MIN_DURATION_S} s of free motion"),
+        )
+        .hint("record minutes of free motion the identification did not fit: a rate per hour is extrapolated from it"));
     }
     Ok(())
 }

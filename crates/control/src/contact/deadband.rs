@@ -34,17 +34,16 @@ pub(crate) fn checked_deadband(deadband: &[f64], n: usize) -> Result<Vec<f64>, C
     if deadband.len() != n {
         return Err(ConfigError::new(
             "deadband",
-            format!(
-                "has {} values for {n} joints: give one per joint",
-                deadband.len()
-            ),
-        ));
+            format!("has {} values for {n} joints", deadband.len()),
+        )
+        .hint("one value per joint in chain order, e.g. a contact floor's contact_thresholds"));
     }
     if let Some(i) = deadband.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
         return Err(ConfigError::new(
             format!("deadband[{i}]"),
             format!("is {}: must be finite and >= 0 (N m)", deadband[i]),
-        ));
+        )
+        .hint("0 leaves the joint without a deadband"));
     }
     Ok(if deadband.iter().all(|d| *d == 0.0) {
         Vec::new()

@@ -71,7 +71,11 @@ impl Scenario {
             _ => {}
         }
         if let Err(e) = c.calibration_config().validate() {
-            out.push(Invalid::new(format!("contact.{}", e.key), e.message));
+            let invalid = Invalid::new(format!("contact.{}", e.key), e.message);
+            out.push(match e.hint {
+                Some(h) => invalid.hint(h),
+                None => invalid,
+            });
         }
         if c.calibration.is_some() && self.observer.kind != ObserverKind::Momentum {
             out.push(

@@ -272,15 +272,14 @@ pub(crate) fn loop_problem(e: LoopError) -> Invalid {
         "control_rate_hz" => "plant.control_rate_hz".to_string(),
         key => key.to_string(),
     };
-    let message = match &e {
-        LoopError::Invalid { message, .. } => message.clone(),
-        other => other.to_string(),
+    let (message, hint) = match &e {
+        LoopError::Invalid { message, hint, .. } => (message.clone(), hint.map(String::from)),
+        LoopError::Component { source, .. } => (source.message.clone(), source.hint.clone()),
+        other => (other.to_string(), None),
     };
     let invalid = Invalid::new(key, message);
-    match e {
-        LoopError::Invalid {
-            hint: Some(hint), ..
-        } => invalid.hint(hint),
-        _ => invalid,
+    match hint {
+        Some(hint) => invalid.hint(hint),
+        None => invalid,
     }
 }
