@@ -24,8 +24,10 @@ pub fn seconds(text: &str) -> Result<f64, String> {
 #[derive(Args)]
 pub struct CalibrateContactArgs {
     /// Free motion that the identification did not fit (CSV, docs/outputs.md): a second
-    /// recording, or the held-out stretch of one (--from).
-    data: PathBuf,
+    /// recording, or the held-out stretch of one (--from); several files are pooled, each
+    /// after its own warm-up (motion at several speeds and poses holds more than one file).
+    #[arg(required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
     /// The identification file (`admittance identify`); the URDF it names is loaded.
     #[arg(long)]
     identification: PathBuf,
@@ -35,7 +37,8 @@ pub struct CalibrateContactArgs {
     /// False contact events per hour the floor allows, all joints together.
     #[arg(long, default_value_t = 1.0, value_parser = positive_number)]
     false_alarms_per_hour: f64,
-    /// Use the rows with t >= FROM (s) only (e.g. the stretch identify's --until left out).
+    /// Use the rows with t >= FROM (s) only (e.g. the stretch identify's --until left out;
+    /// of every file).
     #[arg(long, default_value_t = 0.0, value_parser = seconds)]
     from: f64,
     /// Use the rows with t < UNTIL (s) only.
@@ -98,8 +101,11 @@ pub fn calibrate_contact(args: &CalibrateContactArgs) -> Result<(), CliError> {
     }
     let (ident, arm) = load_identification(&args.identification)?;
     let joints: Vec<String> = arm.joint_names().map(String::from).collect();
-    let data = crate::train_cmd::load_data(&args.data, Some(&joints))?;
-    let data = rows_between(&args.data, data, args.from, args.until, 100)?;
+    let mut recordings = Vec::with_capacity(args.data.len());
+    for path in &args.data {
+        let data = crate::train_cmd::load_data(path, Some(&joints))?;
+        recordings.push(rows_between(path, data, args.from, args.until, 100)?);
+    }
     let observer = MomentumObserverConfig {
         gain: JointValues::Uniform(args.gain),
     };
@@ -108,11 +114,15 @@ pub fn calibrate_contact(args: &CalibrateContactArgs) -> Result<(), CliError> {
         grow_with_motion: !args.constant,
         ..Default::default()
     };
-    let mut floor = admittance_scenario::calibrate_contact_on(&data, &ident, &observer, &config)
-        .map_err(|e| CliError::input(format!("{}: {e}", args.data.display())))?;
-    floor
-        .source
-        .insert("data".into(), json!(args.data.display().to_string()));
+    let names: Vec<String> = args.data.iter().map(|p| p.display().to_string()).collect();
+    let mut floor =
+        admittance_scenario::calibrate_contact_on_all(&recordings, &ident, &observer, &config)
+            .map_err(|e| CliError::input(format!("{}: {e}", names.join(", "))))?;
+    let data = match names.as_slice() {
+        [one] => json!(one),
+        many => json!(many),
+    };
+    floor.source.insert("data".into(), data);
     floor.source.insert("from_s".into(), json!(args.from));
     floor.source.insert("until_s".into(), json!(args.until));
     floor.source.insert(

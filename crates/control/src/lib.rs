@@ -65,8 +65,8 @@ pub use baselines::{ComputedTorqueConfig, ComputedTorqueController, PdConfig, Pd
 pub use config::{AxisValues, JointValues};
 pub use contact::{
     calibrate_contact, calibrate_contact_with, soft_deadband, ContactCalibration,
-    ContactCalibrationConfig, ContactDetector, ContactFloor, ContactState, CONTACT_FLOOR_FORMAT,
-    CONTACT_FLOOR_FORMAT_VERSION, DEADBAND_KNEE,
+    ContactCalibrationConfig, ContactDetector, ContactFloor, ContactState, LevelShape,
+    CONTACT_FLOOR_FORMAT, CONTACT_FLOOR_FORMAT_VERSION, DEADBAND_KNEE,
 };
 pub use controller::{ControlInput, Controller};
 pub use error::{ConfigError, Fault, StepStatus};

@@ -17,7 +17,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 
 use crate::config;
 use crate::control::FaultRecord;
-use crate::convert::{read_vector, value_error, vector_out};
+use crate::convert::{config_error, read_vector, value_error, vector_out};
 use crate::model::PyModel;
 use crate::network::PyNetwork;
 
@@ -306,6 +306,8 @@ impl PyClosedLoop {
 /// after each `ClosedLoop.step` and plant step, `finish` at the end, and `write_run_folder`
 /// with the recorders. `config` is the loop's config dict; metrics are taken over
 /// `[evaluation_start, duration]`; `VARIANT.csv` gets a row every `decimation` steps.
+/// `contact_floor` (a `ContactFloor`): contact detection on the loop's estimate, as a
+/// scenario's `[contact]` (its columns, metrics and the floor's file in the run folder).
 #[pyclass(
     unsendable,
     module = "admittance._admittance",
@@ -374,7 +376,8 @@ impl PyVariantRecorder {
 #[pymethods]
 impl PyVariantRecorder {
     #[new]
-    #[pyo3(signature = (name, m, config, duration, evaluation_start, decimation=10))]
+    #[pyo3(signature = (name, m, config, duration, evaluation_start, decimation=10, contact_floor=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         name: String,
         m: &Bound<'_, PyModel>,
@@ -382,12 +385,18 @@ impl PyVariantRecorder {
         duration: f64,
         evaluation_start: f64,
         decimation: usize,
+        contact_floor: Option<PyRef<'_, crate::contact::PyContactFloor>>,
     ) -> PyResult<Self> {
         let cfg: LoopConfig = config::parse(Some(config), "VariantRecorder config")?;
         let model = &m.get().model;
-        let gather =
+        let mut gather =
             ExternalVariant::new(&name, model, &cfg, duration, evaluation_start, decimation)
                 .map_err(|e| loop_error("VariantRecorder", e))?;
+        if let Some(floor) = contact_floor {
+            gather
+                .detect_contact(&floor.floor)
+                .map_err(|e| config_error("VariantRecorder", e))?;
+        }
         let n = model.nq();
         Ok(PyVariantRecorder {
             name,

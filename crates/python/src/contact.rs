@@ -20,7 +20,7 @@ use crate::identification::PyIdentification;
 
 const JOINTS: &str = "one value per joint, in chain order";
 
-/// Per-joint contact and collision thresholds (N m at rest) for a stated false-alarm rate,
+/// Per-joint contact and collision thresholds (N m at standstill) for a stated false-alarm rate,
 /// from `calibrate_contact` or `load_contact_floor`. `describe()` prints the floor with what
 /// it guarantees and under which assumption; `save(path)` writes its versioned file.
 #[pyclass(frozen, module = "admittance._admittance", name = "ContactFloor")]
@@ -49,6 +49,40 @@ impl PyContactFloor {
     #[getter]
     fn acceleration_gain<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.floor.acceleration_gain)
+    }
+    /// The fraction the levels drop by once the joint moves faster than `rest_width`, `(n,)`
+    /// (the false torque peaks at reversals).
+    #[getter]
+    fn moving_drop<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let n = self.floor.dof();
+        let v: Vec<f64> = (0..n)
+            .map(|i| self.floor.moving_drop.get(i).copied().unwrap_or(0.0))
+            .collect();
+        PyArray1::from_vec(py, v)
+    }
+    /// The contact levels (N m) at velocities `qdot` and accelerations `qddot`, `(n,)` or
+    /// `(N, n)` as given: the detector's own levels (contact_thresholds times the floor's
+    /// factor).
+    fn contact_levels<'py>(
+        &self,
+        py: Python<'py>,
+        qdot: &Bound<'py, PyAny>,
+        qddot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.floor.dof();
+        let (v, steps, single) = crate::convert::rows(qdot, "qdot", n, true)?;
+        let (a, steps_a, _) = crate::convert::rows(qddot, "qddot", n, true)?;
+        if steps_a != steps {
+            return Err(value_error(format!(
+                "contact_levels: qdot has {steps} rows, qddot {steps_a}"
+            )));
+        }
+        let level = |k: usize, i: usize| self.floor.contact_level(i, v[k * n + i], a[k * n + i]);
+        if single {
+            let out: Vec<f64> = (0..n).map(|i| level(0, i)).collect();
+            return Ok(PyArray1::from_vec(py, out).into_any());
+        }
+        Ok(crate::convert::matrix_out(py, (steps, n), level, None, "out")?.into_any())
     }
     /// The smallest steady torque detected at rest with 95 % probability per sample (N m).
     #[getter]
@@ -99,9 +133,10 @@ fn free_motion(data: DataArg) -> PyResult<FreeMotionData> {
 }
 
 /// The contact floor of the momentum observer on `ident` from free motion `data` that the
-/// identification did not fit (a CSV path or a dict of arrays, as for `identify`): per
-/// joint, the levels whose false events occur `false_alarms_per_hour` times per hour, all
-/// joints together (docs/method.md section 5, "Contact"). `gain`: the observer's K_O (1/s);
+/// identification did not fit (a CSV path or a dict of arrays, as for `identify`, or a list
+/// of them: several recordings pooled, each after its own warm-up): per joint, the levels
+/// whose false events occur `false_alarms_per_hour` times per hour, all joints together
+/// (docs/method.md section 5, "Contact"). `gain`: the observer's K_O (1/s);
 /// `constant=True`: levels that do not grow with speed and acceleration.
 #[pyfunction]
 #[pyo3(signature = (data, ident, false_alarms_per_hour=1.0, gain=50.0, constant=false))]
@@ -115,7 +150,14 @@ pub fn calibrate_contact(
 ) -> PyResult<PyContactFloor> {
     let id = ident.get().identification.clone();
     let joints: Vec<String> = id.model.joint_names().map(String::from).collect();
-    let data = data_arg(data, "data", joints.len(), Some(&joints))?;
+    let given: Vec<DataArg> = match data.cast::<pyo3::types::PyList>() {
+        Ok(list) => list
+            .iter()
+            .enumerate()
+            .map(|(i, d)| data_arg(&d, &format!("data[{i}]"), joints.len(), Some(&joints)))
+            .collect::<PyResult<_>>()?,
+        Err(_) => vec![data_arg(data, "data", joints.len(), Some(&joints))?],
+    };
     let observer = MomentumObserverConfig {
         gain: JointValues::Uniform(gain),
     };
@@ -125,8 +167,11 @@ pub fn calibrate_contact(
         ..Default::default()
     };
     let floor = py.detach(|| {
-        let data = free_motion(data)?;
-        admittance_scenario::calibrate_contact_on(&data, &id, &observer, &config)
+        let recordings = given
+            .into_iter()
+            .map(free_motion)
+            .collect::<PyResult<Vec<_>>>()?;
+        admittance_scenario::calibrate_contact_on_all(&recordings, &id, &observer, &config)
             .map_err(|e| config_error("calibrate_contact", e))
     })?;
     Ok(PyContactFloor { floor })

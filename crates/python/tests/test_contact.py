@@ -79,3 +79,61 @@ def test_an_admittance_with_the_floor_as_deadband_stays_put(baxter, ident_and_fl
     assert np.all(q_band == 0.0) and np.all(np.abs(q_plain) > 0)
     with pytest.raises(ValueError, match="deadband"):
         adm.Admittance(baxter, 3.0, 5.0, deadband=-1.0)
+
+
+def test_several_recordings_pool_into_one_floor_and_levels_follow_the_motion(baxter, ident_and_floor):
+    ident, one = ident_and_floor
+    first = noisy(free_motion(baxter, 60.0, rate=200.0, seed=3, friction=0.3), 3)
+    second = noisy(free_motion(baxter, 60.0, rate=200.0, seed=4, friction=0.3), 4)
+    floor = adm.calibrate_contact([first, second], ident)
+    payload = __import__("json").loads(floor.to_json())
+    assert payload["source"]["recordings"] == 2
+    # Two recordings of 60 s, each less its first second.
+    assert abs(payload["calibration"]["duration_s"] - 118.0) < 0.1
+    # The detector's own levels: the standstill level at rest, one row per sample.
+    n = baxter.n
+    zero = np.zeros(n)
+    assert np.allclose(floor.contact_levels(zero, zero), floor.contact_thresholds)
+    qdot = np.tile(np.linspace(-1.0, 1.0, 5)[:, None], (1, n))
+    levels = floor.contact_levels(qdot, np.zeros_like(qdot))
+    assert levels.shape == (5, n) and np.all(levels > 0)
+    low = floor.contact_thresholds * (1.0 - floor.moving_drop)
+    assert np.all(levels >= low * (1 - 1e-12))
+    with pytest.raises(ValueError, match="rows"):
+        floor.contact_levels(qdot, np.zeros((4, n)))
+    with pytest.raises(ValueError, match=r"data\[1\]"):
+        adm.calibrate_contact([first, {"t": first["t"]}], ident)
+
+
+def test_an_external_plant_gathers_contact_like_a_scenario(baxter, ident_and_floor):
+    """`VariantRecorder(..., contact_floor=floor)`: the scenario runner's contact detection
+    and scoring for a plant outside Rust (one gathering path for both)."""
+    from test_closed_loop import DT, pd_config
+    from conftest import Q0
+
+    _, floor = ident_and_floor
+    n = baxter.n
+    kd = np.maximum(20.0 * np.diag(adm.crba(baxter, Q0)), 0.05)
+    config = pd_config(n, {"kind": "oracle", "cutoff_hz": 20.0, "warmup": 0.1}, kd=kd)
+    loop = adm.ClosedLoop(baxter, config, sensor_cutoff_hz=40.0)
+    seconds = 1.5
+    rec = adm.VariantRecorder("pushed", baxter, config, seconds, 0.2, decimation=5, contact_floor=floor)
+    zeros = np.zeros(n)
+    q, qdot, tau_ext = Q0.copy(), zeros.copy(), zeros.copy()
+    for k in range(int(round(seconds / DT))):
+        t = k * DT
+        tau, _ = loop.step(t, q, None, Q0, zeros, zeros, tau_ext)
+        # A half-sine of 15 N m peak on joint 3 from 0.8 s to 1.2 s: far above its level.
+        size = 15.0 * np.sin(np.pi * (t - 0.8) / 0.4) if 0.8 <= t < 1.2 else 0.0
+        tau_ext = np.where(np.arange(n) == 3, size, 0.0)
+        qdot = qdot + DT * adm.aba(baxter, q, qdot, tau + tau_ext)
+        q = q + DT * qdot
+        assert rec.add(loop, q, qdot, tau_ext) is None
+    rec.finish(loop)
+    m = rec.metrics
+    assert m["contact_pushes"] == 1 and m["contact_pushes_detected"] == 1
+    assert m["contact_false_events"] == 0
+    assert m["contact_isolation"] == 1.0
+    with pytest.raises(ValueError, match="contact_floor"):
+        small = adm.Model.from_urdf(str(__import__("conftest").BAXTER), base="base", tip="left_lower_elbow")
+        adm.VariantRecorder("x", small, pd_config(small.n), 1.0, 0.5, contact_floor=floor)

@@ -129,7 +129,8 @@ metrics! {
     CONTACT_OVER_TWICE_WITHIN_50MS = "contact_over_twice_within_50ms", "", false, Contact, "of those, flagged within 50 ms of the crossing";
     CONTACT_DELAY_MEDIAN_S = "contact_delay_median_s", "s", false, Contact, "median time from the 2x crossing to the contact flag";
     CONTACT_DELAY_MAX_S = "contact_delay_max_s", "s", false, Contact, "largest time from the 2x crossing to the contact flag";
-    CONTACT_ISOLATION = "contact_isolation", "", false, Contact, "share of the detected pushes whose last loaded joint the detector named";
+    CONTACT_ISOLATION = "contact_isolation", "", false, Contact, "share of the detected pushes whose touched part of the chain the detector named (no earlier than the last joint above its level, no later than the last joint the push loads)";
+    CONTACT_ISOLATION_STRICT = "contact_isolation_strict", "", false, Contact, "share of the detected pushes where the detector named exactly the last joint above its level";
     REFERENCE_OFFSET_MAX_ABS = "reference_offset_max_abs", "rad", true, Evaluation, "largest |q_r - q_d|: with nobody touching the arm, the admittance's drift";
 }
 

@@ -63,6 +63,50 @@ impl FreeMotionEstimates {
         Ok(self)
     }
 
+    /// Several recordings' estimates as one series, each continuing one mean sample period
+    /// after the last (their sample periods must agree within 1 %: the floor counts events
+    /// per hour from the number of samples).
+    pub fn pooled(parts: &[FreeMotionEstimates]) -> Result<FreeMotionEstimates, ConfigError> {
+        let nonempty: Vec<&FreeMotionEstimates> = parts.iter().filter(|p| p.len() > 1).collect();
+        let Some(first) = nonempty.first() else {
+            return Ok(parts.first().cloned().unwrap_or(FreeMotionEstimates {
+                joints: 0,
+                t: Vec::new(),
+                estimate: Vec::new(),
+                qdot: Vec::new(),
+                qddot: Vec::new(),
+            }));
+        };
+        let dt = first.mean_dt();
+        let mut out = FreeMotionEstimates {
+            joints: first.joints,
+            t: Vec::new(),
+            estimate: Vec::new(),
+            qdot: Vec::new(),
+            qddot: Vec::new(),
+        };
+        for (i, p) in nonempty.iter().enumerate() {
+            if p.joints != out.joints || (p.mean_dt() - dt).abs() > 0.01 * dt {
+                return Err(ConfigError::new(
+                    format!("data[{i}]"),
+                    format!(
+                        "is sampled every {:.6} s with {} joints, the first recording every \
+                         {dt:.6} s with {}; resample the recordings to one rate",
+                        p.mean_dt(),
+                        p.joints,
+                        out.joints
+                    ),
+                ));
+            }
+            let offset = out.t.last().map_or(0.0, |t| t + dt) - p.t[0];
+            out.t.extend(p.t.iter().map(|t| t + offset));
+            out.estimate.extend_from_slice(&p.estimate);
+            out.qdot.extend_from_slice(&p.qdot);
+            out.qddot.extend_from_slice(&p.qddot);
+        }
+        Ok(out)
+    }
+
     /// The samples from `from_s` after the first on.
     pub fn after(&self, from_s: f64) -> FreeMotionEstimates {
         let t0 = self.t.first().copied().unwrap_or(0.0);
@@ -172,20 +216,59 @@ pub fn calibrate_contact_on(
     observer: &MomentumObserverConfig,
     config: &ContactCalibrationConfig,
 ) -> Result<ContactFloor, ConfigError> {
-    let e = momentum_estimates(data, identification, observer)?;
-    floor_of_estimates(&e, &data.joints, identification, observer, config)
+    calibrate_contact_on_all(std::slice::from_ref(data), identification, observer, config)
 }
 
-/// The contact floor of the momentum observer's estimates `e` over free motion (after the
-/// warm-up), recording what they were made with.
+/// [`calibrate_contact_on`] over several recordings of free motion: each runs through its own
+/// observer and loses its own warm-up, and their estimates are pooled (a floor is only as
+/// good as the variety of its motion: several short recordings at other speeds and poses
+/// hold more of it than one long one).
+pub fn calibrate_contact_on_all(
+    recordings: &[FreeMotionData],
+    identification: &Identification,
+    observer: &MomentumObserverConfig,
+    config: &ContactCalibrationConfig,
+) -> Result<ContactFloor, ConfigError> {
+    let Some(first) = recordings.first() else {
+        return Err(ConfigError::new("data", "no recording was given"));
+    };
+    let mut parts = Vec::with_capacity(recordings.len());
+    for (i, data) in recordings.iter().enumerate() {
+        let located = |e: ConfigError| {
+            if recordings.len() == 1 {
+                e
+            } else {
+                ConfigError::new(format!("data[{i}]"), e.to_string())
+            }
+        };
+        if data.joints != first.joints {
+            return Err(located(ConfigError::new(
+                "joints",
+                format!(
+                    "are {:?}, recording 0 has {:?}; give recordings of one arm",
+                    data.joints, first.joints
+                ),
+            )));
+        }
+        parts.push(momentum_estimates(data, identification, observer).map_err(located)?);
+    }
+    floor_of_estimates(&parts, &first.joints, identification, observer, config)
+}
+
+/// The contact floor of the momentum observer's estimates over one or more recordings of
+/// free motion (each after its warm-up, then pooled), recording what they were made with.
 pub fn floor_of_estimates(
-    e: &FreeMotionEstimates,
+    recordings: &[FreeMotionEstimates],
     joints: &[String],
     identification: &Identification,
     observer: &MomentumObserverConfig,
     config: &ContactCalibrationConfig,
 ) -> Result<ContactFloor, ConfigError> {
-    let e = e.after(CONTACT_WARM_UP_S);
+    let parts: Vec<FreeMotionEstimates> = recordings
+        .iter()
+        .map(|e| e.after(CONTACT_WARM_UP_S))
+        .collect();
+    let e = FreeMotionEstimates::pooled(&parts)?;
     let mut floor = calibrate_contact_with(
         &e.estimate,
         &e.qdot,
@@ -207,6 +290,9 @@ pub fn floor_of_estimates(
     floor
         .source
         .insert("warm_up_s".into(), CONTACT_WARM_UP_S.into());
+    if parts.len() > 1 {
+        floor.source.insert("recordings".into(), parts.len().into());
+    }
     Ok(floor)
 }
 

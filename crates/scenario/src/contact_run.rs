@@ -82,7 +82,7 @@ pub(crate) fn contact_floor(
     .and_then(|e| e.low_passed(observer.cutoff_hz))
     .map_err(|e| ctx.config_err("contact.calibration", &e))?;
     let mut floor = crate::contact::floor_of_estimates(
-        &estimates,
+        std::slice::from_ref(&estimates),
         &joints,
         &nominal.identification,
         &observer.momentum,

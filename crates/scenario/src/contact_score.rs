@@ -62,9 +62,14 @@ pub struct ContactMetrics {
     pub contact_delay_median_s: Option<f64>,
     /// Largest such delay (s).
     pub contact_delay_max_s: Option<f64>,
-    /// Fraction of the detected pushes whose last loaded joint was named (50 ms after the
-    /// true torque's peak, the observer's lag), among those with a joint above its level.
+    /// Fraction of the detected pushes whose touched part of the chain was named right (50
+    /// ms after the true torque's peak, the observer's lag), among those with a joint above
+    /// its level: the named joint is no earlier than the last joint whose true torque exceeds
+    /// its level and no later than the last joint the push loads at all (a joint loaded below
+    /// its level may be named: its child link, or one after it, was touched).
     pub contact_isolation: Option<f64>,
+    /// The same share when only the last joint above its level counts as right.
+    pub contact_isolation_strict: Option<f64>,
     /// Largest `|q_r - q_d|` per joint over the window (rad): with nobody touching, the
     /// admittance's drift.
     pub reference_offset_max_abs: Vec<f64>,
@@ -98,7 +103,8 @@ pub(crate) fn score(
     };
     let mut by_size = [(0usize, 0usize); SIZE_EDGES.len()];
     false_alarms(steps, &touched, dt, &mut m);
-    let (mut delays, mut named, mut named_right) = (Vec::new(), 0usize, 0usize);
+    let (mut delays, mut named, mut named_right, mut named_exactly) =
+        (Vec::new(), 0usize, 0usize, 0usize);
     for &(a, b) in &pushes {
         let end = (b + window).min(steps.len());
         let first = (a..end).find(|&k| steps[k].contact);
@@ -128,10 +134,16 @@ pub(crate) fn score(
             .max_by(|&x, &y| row_max(true_torque, x, n).total_cmp(&row_max(true_torque, y, n)))
             .unwrap_or(a);
         let true_last = (0..n).rev().find(|&i| ratio(peak, i) > 1.0);
-        if let (Some(_), Some(j)) = (first, true_last) {
-            let k_named = (peak + window).min(steps.len() - 1);
+        // Joints beyond the touched link carry no torque of the push at all.
+        let largest = row_max(true_torque, peak, n);
+        let last_loaded = (0..n)
+            .rev()
+            .find(|&i| true_torque[peak * n + i].abs() > 1e-6 * largest);
+        if let (Some(_), Some(j), Some(l)) = (first, true_last, last_loaded) {
+            let link = steps[(peak + window).min(steps.len() - 1)].link;
             named += 1;
-            named_right += usize::from(steps[k_named].link == j as i32);
+            named_exactly += usize::from(link == j as i32);
+            named_right += usize::from((j as i32..=l as i32).contains(&link));
         }
     }
     for (i, &(count, detected)) in by_size.iter().enumerate() {
@@ -145,6 +157,7 @@ pub(crate) fn score(
     m.contact_delay_median_s = (!delays.is_empty()).then(|| delays[delays.len() / 2]);
     m.contact_delay_max_s = delays.last().copied();
     m.contact_isolation = (named > 0).then(|| named_right as f64 / named as f64);
+    m.contact_isolation_strict = (named > 0).then(|| named_exactly as f64 / named as f64);
     m
 }
 
@@ -273,5 +286,27 @@ mod tests {
         flags[9] = (true, 1);
         let m = run(&flags, &torque);
         assert_eq!(m.contact_isolation, Some(0.0)); // joint 0 loaded, joint 1 named
+    }
+
+    /// A push that loads joint 1 below its level and joint 0 above it: naming joint 1 (its
+    /// child link was touched) is right, though not the strict answer; naming a joint the
+    /// push does not load is wrong under both.
+    #[test]
+    fn a_loaded_joint_below_its_level_may_be_named() {
+        let mut torque = vec![[0.0; 2]; 10];
+        torque[4] = [3.0, 0.5];
+        let mut flags = vec![(false, -1); 10];
+        for f in flags.iter_mut().skip(4) {
+            *f = (true, 1);
+        }
+        let m = run(&flags, &torque);
+        assert_eq!(m.contact_isolation, Some(1.0));
+        assert_eq!(m.contact_isolation_strict, Some(0.0));
+        for f in flags.iter_mut().skip(4) {
+            *f = (true, 0);
+        }
+        let m = run(&flags, &torque);
+        assert_eq!(m.contact_isolation, Some(1.0));
+        assert_eq!(m.contact_isolation_strict, Some(1.0));
     }
 }

@@ -5,29 +5,15 @@
 //! ([`crate::run_scenario`]'s); [`crate::write_external_run_folder`] writes them as a run
 //! folder.
 
-use admittance_control::ReferenceInput;
 use admittance_dynamics::Model;
-use admittance_loop::{ClosedLoop, Compliance, LoopConfig, LoopError, LoopStatus, Measurement};
+use admittance_loop::{ClosedLoop, Divergence, LoopConfig, LoopError, LoopStatus, Measurement};
 use admittance_sim::StepRecord;
 
 use crate::error::ScenarioError;
-use crate::gather::{Gather, WindowSample};
-use crate::hand::HandKinematics;
 use crate::metrics::ObserverTrainingMetrics;
-use crate::recorder::{Recorder, Row};
+use crate::recorder::Recorder;
 use crate::runner::{finish, VariantRun};
-use admittance_loop::Divergence;
-
-/// The desired trajectory of one control step (what the loop was given).
-#[derive(Clone, Copy, Debug)]
-pub struct Desired<'a> {
-    /// `q_d`.
-    pub q_d: &'a [f64],
-    /// `q_d'`.
-    pub qdot_d: &'a [f64],
-    /// `q_d''`.
-    pub qddot_d: &'a [f64],
-}
+use crate::step_gather::{Desired, PlantAfter, RowExtras, StepGather};
 
 /// What the plant did in one control step, after the loop's command was applied.
 #[derive(Clone, Copy, Debug)]
@@ -46,18 +32,11 @@ pub struct PlantStep<'a> {
 /// The metrics and series of one variant of an external plant, gathered step by step.
 pub struct ExternalVariant {
     name: String,
-    model: Model,
     joints: Vec<String>,
     dt: f64,
-    evaluation_start: f64,
-    gather: Gather,
-    recorder: Recorder,
-    kinematics: HandKinematics,
-    /// The admittance model driven by the true external torque (`admittance_error_rms`).
-    oracle: Option<Compliance>,
+    steps: StepGather,
+    /// The plant's last step as the gathering reads it.
     record: StepRecord,
-    k: usize,
-    stopped: bool,
 }
 
 impl ExternalVariant {
@@ -101,20 +80,35 @@ impl ExternalVariant {
         if config.observer.kind == admittance_loop::ObserverKind::Hybrid {
             recorder.record_coverage();
         }
+        let oracle = config.compliance(model)?;
         Ok(Self {
             name: name.to_string(),
-            model: model.clone(),
-            gather: Gather::new(model, &joints, &effort, steps, false),
-            recorder,
-            kinematics: HandKinematics::new(model),
-            oracle: config.compliance(model)?,
+            dt,
+            steps: StepGather::new(
+                model,
+                &joints,
+                &effort,
+                steps,
+                dt,
+                evaluation_start,
+                recorder,
+                oracle,
+                None,
+                false,
+            ),
             record: StepRecord::new(n),
             joints,
-            dt,
-            evaluation_start,
-            k: 0,
-            stopped: false,
         })
+    }
+
+    /// Detects contact on the loop's estimate with `floor`'s levels (the contact columns and
+    /// metrics of a scenario's `[contact]`, and the floor in the run folder); before the
+    /// first step.
+    pub fn detect_contact(
+        &mut self,
+        floor: &admittance_control::ContactFloor,
+    ) -> Result<(), admittance_control::ConfigError> {
+        self.steps.detect_contact(floor, &self.joints)
     }
 
     /// The variant's name.
@@ -124,18 +118,18 @@ impl ExternalVariant {
 
     /// Control steps gathered.
     pub fn steps(&self) -> usize {
-        self.k
+        self.steps.steps()
     }
 
     /// The divergence that stopped the variant, if any.
     pub fn divergence(&self) -> Option<&Divergence> {
-        self.gather.health.divergence.as_ref()
+        self.steps.divergence()
     }
 
     /// One control step at `time`: the loop `lp` has stepped on `measurement` towards
     /// `desired` (with `status`), and the plant has applied its command (`plant`). Returns
     /// the divergence when this step left the physical bounds (the variant must stop: later
-    /// steps are ignored), as the scenario runner does.
+    /// steps are ignored), as the scenario runner does: both gather through one code path.
     pub fn add(
         &mut self,
         time: f64,
@@ -145,81 +139,28 @@ impl ExternalVariant {
         status: &LoopStatus,
         plant: &PlantStep<'_>,
     ) -> Option<&Divergence> {
-        if self.stopped {
-            return self.divergence();
+        if self.steps.divergence().is_none() {
+            // The record of this step; once stopped, the gathering ignores every later one.
+            let record = &mut self.record;
+            record.time = time + self.dt;
+            copy(&mut record.command, lp.torque());
+            copy(&mut record.applied, plant.applied);
+            copy(&mut record.tau_ext, plant.tau_ext);
         }
-        let dt = self.dt;
-        // The true torque the loop's step saw (that of the previous plant step).
-        if let Some(adm) = self.oracle.as_mut() {
-            let _ = adm.step(
-                &ReferenceInput {
-                    q_d: desired.q_d,
-                    qdot_d: desired.qdot_d,
-                    qddot_d: desired.qddot_d,
-                    q: &measurement.q,
-                    external_torque_estimate: &self.record.tau_ext,
-                },
-                dt,
-            );
-        }
-        let k = self.k;
-        self.k += 1;
-        let stale_sample = measurement
-            .sample_time
-            .iter()
-            .any(|&ts| time - ts > 0.5 * dt);
-        self.gather.after_control(k, status, lp, stale_sample);
-        if self
-            .gather
-            .diverged(time, plant.q, plant.qdot, measurement, lp)
-        {
-            self.stopped = true;
-            return self.divergence();
-        }
-        let record = &mut self.record;
-        record.time = time + dt;
-        copy(&mut record.command, lp.torque());
-        copy(&mut record.applied, plant.applied);
-        copy(&mut record.tau_ext, plant.tau_ext);
-        let p_ref = self.kinematics.position(&self.model, lp.q_r());
-        let p_hand = self.kinematics.position(&self.model, plant.q);
-        let ee_error = (0..3)
-            .map(|i| (p_hand[i] - p_ref[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if time >= self.evaluation_start {
-            self.gather.in_window(&WindowSample {
-                q_r: lp.q_r(),
-                q: plant.q,
-                torque: lp.torque(),
-                estimate: lp.external_torque_estimate(),
-                record: &self.record,
-                q_r_oracle: self.oracle.as_ref().map(|a| a.q_r()),
-                ee_error,
-                hand: None,
-                coverage: lp.estimate_coverage(),
-            });
-        }
-        if self.recorder.wants(k) {
-            self.recorder.row(&Row {
-                t: time,
-                q_d: desired.q_d,
-                q_r: lp.q_r(),
+        self.steps.add(
+            time,
+            desired,
+            measurement,
+            lp,
+            status,
+            &PlantAfter {
                 q: plant.q,
                 qdot: plant.qdot,
-                measurement,
-                torque: lp.torque(),
                 record: &self.record,
-                estimate: lp.external_torque_estimate(),
-                ee_error,
-                f: None,
-                nodes: None,
-                hand: None,
-                coverage: lp.estimate_coverage(),
-                contact: None,
-            });
-        }
-        None
+                hand_force: None,
+            },
+            &RowExtras::default(),
+        )
     }
 
     /// The variant's metrics, series and divergence; `training`: how its observer's network
@@ -230,15 +171,12 @@ impl ExternalVariant {
         lp: &ClosedLoop,
         training: Option<ObserverTrainingMetrics>,
     ) -> Result<VariantRun, ScenarioError> {
-        let with_oracle = self.oracle.is_some();
         finish(
             &self.name,
             lp,
-            self.gather,
-            self.recorder,
+            self.steps,
             None,
             self.joints,
-            with_oracle,
             training,
             None,
         )

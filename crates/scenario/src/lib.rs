@@ -55,18 +55,19 @@ mod series;
 mod settings;
 mod source;
 mod spec;
+mod step_gather;
 mod training;
 mod trajectory;
 
 pub use admittance_loop::Divergence;
 pub use assemble::gain_warnings;
 pub use contact::{
-    calibrate_contact_on, count_false_alarms, detect, floor_of_estimates, momentum_estimates,
-    FalseAlarms, FreeMotionEstimates, CONTACT_WARM_UP_S,
+    calibrate_contact_on, calibrate_contact_on_all, count_false_alarms, detect, floor_of_estimates,
+    momentum_estimates, FalseAlarms, FreeMotionEstimates, CONTACT_WARM_UP_S,
 };
 pub use contact_score::ContactMetrics;
 pub use error::{Invalid, ScenarioError};
-pub use external::{Desired, ExternalVariant, PlantStep};
+pub use external::{ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use identify_recording::{
     conditioning_step_response_s, identify_recording, sample_rate_hz, ConditionedSamples,
@@ -87,5 +88,6 @@ pub use spec::{
     mid_range, ArmSpec, ContactSpec, DynamicNodesSpec, OutputSpec, RecordSpec, Scenario, SineSpec,
     TrainingSpec, TrajectorySpec,
 };
+pub use step_gather::Desired;
 pub use training::{TrainedNetwork, VALIDATION_DECIMATION};
 pub use trajectory::Trajectory;

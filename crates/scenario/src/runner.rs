@@ -1,24 +1,23 @@
 //! One variant of a scenario, run: the assembled parts stepped period by period (the
-//! plant, its sensors, the [`ClosedLoop`], the dynamic-node events), with the metrics
-//! ([`Gather`]) and the time series ([`Recorder`]) gathered on the way.
+//! plant, its sensors, the [`ClosedLoop`], the dynamic-node events), with the metrics and
+//! the time series gathered on the way (`step_gather.rs`, shared with an external plant).
 
 use std::path::Path;
 
-use admittance_control::{NetworkId, ReferenceInput};
+use admittance_control::NetworkId;
 use admittance_loop::{ClosedLoop, LoopInput};
 use admittance_sim::SimError;
 
 use crate::assemble::{assemble, Assembly};
 use crate::context::Ctx;
 use crate::error::ScenarioError;
-use crate::gather::{Gather, WindowSample};
-use crate::hand::HandKinematics;
 use crate::metrics::VariantMetrics;
 use crate::node_events::NodeEvents;
 use crate::progress::{RunOptions, Stage};
-use crate::recorder::{Recorder, Row};
+use crate::recorder::Recorder;
 use crate::series::TimeSeries;
 use crate::source::ScenarioSource;
+use crate::step_gather::{Desired, PlantAfter, RowExtras, StepGather};
 use admittance_loop::Divergence;
 
 /// The outcome of one variant.
@@ -82,12 +81,12 @@ fn simulate_variant(
         mut plant,
         mut sensors,
         mut closed_loop,
-        mut oracle_admittance,
+        oracle_admittance,
         observer_training,
         observer_validation,
         identification,
         arm_warnings,
-        mut contact,
+        contact,
     } = parts;
     let n = joints.len();
     let dt = closed_loop.dt();
@@ -113,13 +112,20 @@ fn simulate_variant(
     if closed_loop.estimate_coverage().is_some() {
         recorder.record_coverage();
     }
-    if contact.is_some() {
-        recorder.record_contact(&joints);
-    }
-    let mut gather = Gather::new(&model, &joints, &effort, steps, with_hand);
+    let mut steps_gathered = StepGather::new(
+        &model,
+        &joints,
+        &effort,
+        steps,
+        dt,
+        scenario.evaluation_start,
+        recorder,
+        oracle_admittance,
+        contact,
+        with_hand,
+    );
     let mut gates = crate::gate_stage::GateStage::new(&model, &scenario.gates, dt)
         .map_err(|e| ctx.err("plant", e.to_string(), None))?;
-    let mut kinematics = HandKinematics::new(&model);
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
     let variant_name = ctx.variant.unwrap_or("base");
@@ -136,17 +142,7 @@ fn simulate_variant(
         let m = gates
             .sample(&mut sensors, t, plant.q(), closed_loop.torque())
             .map_err(sim_err)?;
-        recorder.sensed(t, m);
-        if let Some(adm) = oracle_admittance.as_mut() {
-            let input = ReferenceInput {
-                q_d: &q_d,
-                qdot_d: &qd_d,
-                qddot_d: &qdd_d,
-                q: &m.q,
-                external_torque_estimate: plant.tau_ext(),
-            };
-            let _ = adm.step(&input, dt);
-        }
+        steps_gathered.recorder.sensed(t, m);
         if let Some(ev) = events.as_mut() {
             ev.before_step(ctx, t, &mut closed_loop)?;
         }
@@ -158,99 +154,50 @@ fn simulate_variant(
             measurement: m,
             true_external_torque: plant.tau_ext(),
         });
-        // A sample older than this period (the driver repeated a joint's last reading) is
-        // stale whether or not the controller could tell from the values.
-        let stale_sample = m.sample_time.iter().any(|&ts| t - ts > 0.5 * dt);
-        if let Some(c) = contact.as_mut() {
-            c.update(closed_loop.external_torque_estimate(), &m.qdot, &m.qddot);
-        }
-        gather.after_control(k, &status, &closed_loop, stale_sample);
         if let Some(ev) = events.as_mut() {
             ev.after_step(k, t, &model, plant.q(), plant.qdot(), &closed_loop);
         }
         plant.step_control(closed_loop.torque()).map_err(sim_err)?;
+        let desired = Desired {
+            q_d: &q_d,
+            qdot_d: &qd_d,
+            qddot_d: &qdd_d,
+        };
+        let after = PlantAfter {
+            q: plant.q(),
+            qdot: plant.qdot(),
+            record: plant.record(),
+            hand_force: with_hand.then(|| plant.environment().tip_force()),
+        };
+        let extras = RowExtras {
+            f: events.as_ref().map(|ev| {
+                (
+                    &ev.f_true[..],
+                    closed_loop.neural().map(|c| c.f_hat()).unwrap_or(&zeros),
+                )
+            }),
+            nodes: closed_loop.neural().map(|nn| nn.node_count(NetworkId::F)),
+        };
         // A step that left the physical bounds ends the variant before it reaches the
         // metrics: what they hold is the run up to that point.
-        if gather.diverged(t, plant.q(), plant.qdot(), m, &closed_loop) {
+        if steps_gathered
+            .add(t, &desired, m, &closed_loop, &status, &after, &extras)
+            .is_some()
+        {
             break;
-        }
-        let record = plant.record();
-        // Hand error by forward kinematics of the true angles against the reference.
-        let p_ref = kinematics.position(&model, closed_loop.q_r());
-        let p_hand = kinematics.position(&model, plant.q());
-        let ee_error = (0..3)
-            .map(|i| (p_hand[i] - p_ref[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let hand_force = plant.environment().tip_force();
-        let hand_estimate = closed_loop
-            .admittance()
-            .and_then(|c| c.task_space())
-            .map(|a| &a.wrench_estimate()[..3]);
-        if t >= scenario.evaluation_start {
-            if let Some(c) = contact.as_mut() {
-                c.in_window(t, &record.tau_ext, closed_loop.q_r(), &q_d);
-            }
-            gather.in_window(&WindowSample {
-                q_r: closed_loop.q_r(),
-                q: plant.q(),
-                torque: closed_loop.torque(),
-                estimate: closed_loop.external_torque_estimate(),
-                record,
-                q_r_oracle: oracle_admittance.as_ref().map(|a| a.q_r()),
-                ee_error,
-                hand: hand_estimate.map(|f_hat| (&hand_force, f_hat)),
-                coverage: closed_loop.estimate_coverage(),
-            });
-        }
-        if recorder.wants(k) {
-            let p_d = if with_hand {
-                kinematics.position(&model, &q_d)
-            } else {
-                [0.0; 3]
-            };
-            recorder.row(&Row {
-                t,
-                q_d: &q_d,
-                q_r: closed_loop.q_r(),
-                q: plant.q(),
-                qdot: plant.qdot(),
-                measurement: m,
-                torque: closed_loop.torque(),
-                record,
-                estimate: closed_loop.external_torque_estimate(),
-                ee_error,
-                f: events.as_ref().map(|ev| {
-                    (
-                        &ev.f_true[..],
-                        closed_loop.neural().map(|c| c.f_hat()).unwrap_or(&zeros),
-                    )
-                }),
-                nodes: closed_loop.neural().map(|nn| nn.node_count(NetworkId::F)),
-                hand: hand_estimate
-                    .map(|f_hat| [&hand_force[..], f_hat, &p_hand[..], &p_ref[..], &p_d[..]]),
-                coverage: closed_loop.estimate_coverage(),
-                contact: contact.as_ref().map(|c| c.flags()),
-            });
         }
     }
     options.report(variant_name, Stage::Simulate, steps as u64, steps as u64);
     let mut run = finish(
         variant_name,
         &closed_loop,
-        gather,
-        recorder,
+        steps_gathered,
         events,
         joints,
-        oracle_admittance.is_some(),
         observer_training,
         observer_validation,
     )?;
     run.arm_warnings = arm_warnings;
-    if let Some(c) = contact {
-        run.contact_floor = Some(c.floor().clone());
-        run.metrics.contact = Some(c.finish());
-    }
     run.health_settings = scenario.health.clone();
     run.metrics.identification = identification;
     run.metrics.gated_samples = Some(gates.counts());
@@ -259,19 +206,18 @@ fn simulate_variant(
 }
 
 /// Everything gathered, as a [`VariantRun`].
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     name: &str,
     closed_loop: &ClosedLoop,
-    gather: Gather,
-    recorder: Recorder,
+    mut steps: StepGather,
     events: Option<NodeEvents>,
     joints: Vec<String>,
-    with_oracle_reference: bool,
     observer_training: Option<crate::metrics::ObserverTrainingMetrics>,
     observer_validation: Option<TimeSeries>,
 ) -> Result<VariantRun, ScenarioError> {
-    let (mut metrics, health) = gather.finish(with_oracle_reference);
+    let with_oracle_reference = steps.with_oracle();
+    let contact = steps.contact.take();
+    let (mut metrics, health) = steps.gather.finish(with_oracle_reference);
     metrics.observer_training = observer_training;
     if let Some(nn) = closed_loop.neural() {
         metrics.nodes = nn
@@ -289,6 +235,9 @@ pub(crate) fn finish(
         metrics.dynamic_nodes = Some(dynamic);
         node_weights = Some(weights);
     }
+    let recorder = steps.recorder;
+    let contact_floor = contact.as_ref().map(|c| c.floor().clone());
+    metrics.contact = contact.map(|c| c.finish());
     Ok(VariantRun {
         name: name.to_string(),
         metrics,
@@ -301,6 +250,6 @@ pub(crate) fn finish(
         arm_warnings: Vec::new(),
         health_settings: Default::default(),
         settings: Default::default(),
-        contact_floor: None,
+        contact_floor,
     })
 }

@@ -48,14 +48,11 @@ fn free_motion_csv(dir: &Path, seed: f64, seconds: f64) -> PathBuf {
     )
 }
 
-#[test]
-fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
-    let dir = tempfile::tempdir().unwrap();
+/// The Baxter model identified on 30 s of free motion (`admittance identify`), in `dir`.
+fn identified(dir: &Path) -> PathBuf {
     let urdf = root().join("models/baxter_left_arm.urdf");
-    let train = free_motion_csv(dir.path(), 0.3, 30.0);
-    let held_out = free_motion_csv(dir.path(), 1.9, 120.0);
-    let other = free_motion_csv(dir.path(), 2.7, 120.0);
-    let ident = dir.path().join("baxter.ident.json");
+    let train = free_motion_csv(dir, 0.3, 30.0);
+    let ident = dir.join("baxter.ident.json");
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let o = admittance(&[
         "identify",
@@ -67,6 +64,17 @@ fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
         &s(&ident),
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    ident
+}
+
+#[test]
+fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let ident = identified(dir.path());
+    let held_out = free_motion_csv(dir.path(), 1.9, 120.0);
+    let other = free_motion_csv(dir.path(), 2.7, 120.0);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
     let floor = dir.path().join("floor.json");
     let o = admittance(&[
         "calibrate-contact",
@@ -114,4 +122,52 @@ fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
     assert!(!o.status.success());
     assert!(text(&o).contains("not overwritten"), "{}", text(&o));
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
+}
+
+/// Several recordings are pooled into one floor (each after its own warm-up); a recording
+/// of another arm is refused, naming it.
+#[test]
+fn several_recordings_make_one_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let ident = identified(dir.path());
+    let first = free_motion_csv(dir.path(), 1.9, 40.0);
+    let second = free_motion_csv(dir.path(), 2.7, 40.0);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let floor = dir.path().join("floor.json");
+    let o = admittance(&[
+        "calibrate-contact",
+        &s(&first),
+        &s(&second),
+        "--identification",
+        &s(&ident),
+        "--out",
+        &s(&floor),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let f = admittance_control::ContactFloor::load(&floor).unwrap();
+    assert_eq!(f.source["recordings"], 2);
+    assert_eq!(f.source["data"].as_array().map(Vec::len), Some(2));
+    // Two recordings of 40 s, each less its first second.
+    assert!(
+        (f.calibration.duration_s - 78.0).abs() < 0.1,
+        "{}",
+        f.calibration.duration_s
+    );
+
+    // A recording whose joints are other than the arm's is refused, naming it.
+    let other = dir.path().join("other.csv");
+    let mine = std::fs::read_to_string(&second).unwrap();
+    std::fs::write(&other, mine.replacen("left_s0", "right_s0", 1)).unwrap();
+    let o = admittance(&[
+        "calibrate-contact",
+        &s(&first),
+        &s(&other),
+        "--identification",
+        &s(&ident),
+        "--out",
+        &s(&dir.path().join("refused.json")),
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("other.csv"), "{}", text(&o));
+    assert!(!dir.path().join("refused.json").exists());
 }

@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::floor::{ContactCalibration, ContactFloor};
+use super::spread::fit_spread;
 use super::tail::{event_peaks, level_for_rate};
 use crate::error::ConfigError;
 
@@ -104,8 +105,8 @@ pub fn calibrate_contact(
 /// sample), with the measured `qdot` and `qddot` of the same samples, sample period `dt`
 /// (docs/method.md section 5, "Contact").
 ///
-/// Per joint: the spread `s(qdot, qddot) = s0 (1 + g_v |qdot| + g_a |qddot|)` of the estimate
-/// (least squares of `|estimate|` on `1, |qdot_i|, |qddot_i|`, slopes kept >= 0), then the
+/// Per joint: the spread of the estimate as a function of `qdot_i` and `qddot_i` (the
+/// `spread` module: growth with speed and acceleration, a peak at reversals), then the
 /// level of `|estimate| / s` whose events occur `false_alarms_per_hour / joints` times per
 /// hour (so that all joints together raise the user's rate), from the tail of the per-event
 /// peaks (see the `tail` module); the collision level likewise at the rate times
@@ -131,13 +132,10 @@ pub fn calibrate_contact_with(
     let mut shortfall = Vec::new();
     for i in 0..joints {
         let (e, v, a) = (column(estimates, i), column(qdot, i), column(qddot, i));
-        let (s0, gv, ga) = if config.grow_with_motion {
-            spread_model(&e, &v, &a)
-        } else {
-            (mean_abs(&e), 0.0, 0.0)
-        };
+        let spread = fit_spread(&e, &v, &a, config.grow_with_motion);
+        let s0 = spread.standstill;
         let z: Vec<f64> = (0..samples)
-            .map(|k| e[k] / (s0 * (1.0 + gv * v[k].abs() + ga * a[k].abs())))
+            .map(|k| e[k] / (s0 * spread.shape.factor(v[k], a[k])))
             .collect();
         let contact = level_for_rate(&z, hours, release, rate);
         let collision = level_for_rate(&z, hours, release, collision_rate);
@@ -147,8 +145,14 @@ pub fn calibrate_contact_with(
         floor
             .collision_thresholds
             .push((collision.level * s0).max(config.collision_min_ratio * contact_level));
-        floor.speed_gain.push(gv);
-        floor.acceleration_gain.push(ga);
+        let shape = spread.shape;
+        floor.speed_gain.push(shape.speed_gain);
+        floor.acceleration_gain.push(shape.acceleration_gain);
+        floor.moving_drop.push(shape.moving_drop);
+        floor.rest_width.push(shape.rest_width);
+        floor.reversal_gain.push(shape.reversal_gain);
+        floor.knee_speed.push(shape.knee_speed);
+        floor.knee_gain.push(shape.knee_gain);
         c.max_abs_qdot
             .push(v.iter().fold(0.0, |m, x| m.max(x.abs())));
         c.max_abs_qddot
@@ -230,6 +234,11 @@ fn empty_floor(
         collision_thresholds: Vec::with_capacity(joints),
         speed_gain: Vec::with_capacity(joints),
         acceleration_gain: Vec::with_capacity(joints),
+        moving_drop: Vec::with_capacity(joints),
+        rest_width: Vec::with_capacity(joints),
+        reversal_gain: Vec::with_capacity(joints),
+        knee_speed: Vec::with_capacity(joints),
+        knee_gain: Vec::with_capacity(joints),
         release_fraction: config.release_fraction,
         false_alarms_per_hour: config.false_alarms_per_hour,
         collision_false_alarms_per_hour: config.false_alarms_per_hour * config.collision_rate_ratio,
@@ -250,78 +259,6 @@ fn empty_floor(
         },
         source: BTreeMap::new(),
         created_by: format!("admittance-control {}", env!("CARGO_PKG_VERSION")),
-    }
-}
-
-fn mean_abs(e: &[f64]) -> f64 {
-    (e.iter().map(|x| x.abs()).sum::<f64>() / e.len().max(1) as f64).max(1e-9)
-}
-
-/// `|e| ~ s0 + s_v |v| + s_a |a|` by least squares with slopes >= 0 (a negative slope is
-/// dropped and the rest refitted); returns `(s0, s_v / s0, s_a / s0)`. `s0` is kept at
-/// least a quarter of the mean `|e|`, so that the levels at rest stay above the noise.
-fn spread_model(e: &[f64], v: &[f64], a: &[f64]) -> (f64, f64, f64) {
-    let y: Vec<f64> = e.iter().map(|x| x.abs()).collect();
-    let av: Vec<f64> = v.iter().map(|x| x.abs()).collect();
-    let aa: Vec<f64> = a.iter().map(|x| x.abs()).collect();
-    let mut use_v = true;
-    let mut use_a = true;
-    let mut coef = (mean_abs(e), 0.0, 0.0);
-    for _ in 0..3 {
-        let cols: Vec<&[f64]> = [(use_v, &av[..]), (use_a, &aa[..])]
-            .iter()
-            .filter(|(u, _)| *u)
-            .map(|(_, c)| *c)
-            .collect();
-        let beta = least_squares(&y, &cols);
-        let mut k = 1;
-        let sv = if use_v {
-            k += 1;
-            beta[k - 1]
-        } else {
-            0.0
-        };
-        let sa = if use_a { beta[k] } else { 0.0 };
-        coef = (beta[0], sv, sa);
-        if sv < 0.0 {
-            use_v = false;
-            continue;
-        }
-        if sa < 0.0 {
-            use_a = false;
-            continue;
-        }
-        break;
-    }
-    let (mut s0, sv, sa) = coef;
-    s0 = s0.max(0.25 * mean_abs(e)).max(1e-9);
-    (s0, sv.max(0.0) / s0, sa.max(0.0) / s0)
-}
-
-/// Least squares of `y` on an intercept and `cols` (normal equations, at most 3 unknowns).
-fn least_squares(y: &[f64], cols: &[&[f64]]) -> Vec<f64> {
-    let p = cols.len() + 1;
-    let x = |k: usize, j: usize| if j == 0 { 1.0 } else { cols[j - 1][k] };
-    let mut ata = nalgebra::DMatrix::<f64>::zeros(p, p);
-    let mut aty = nalgebra::DVector::<f64>::zeros(p);
-    for k in 0..y.len() {
-        for r in 0..p {
-            aty[r] += x(k, r) * y[k];
-            for c in 0..p {
-                ata[(r, c)] += x(k, r) * x(k, c);
-            }
-        }
-    }
-    for d in 0..p {
-        ata[(d, d)] += 1e-12 * (1.0 + ata[(d, d)]);
-    }
-    match ata.clone().cholesky() {
-        Some(ch) => ch.solve(&aty).iter().copied().collect(),
-        None => {
-            let mut b = vec![0.0; p];
-            b[0] = y.iter().sum::<f64>() / y.len().max(1) as f64;
-            b
-        }
     }
 }
 

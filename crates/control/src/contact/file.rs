@@ -11,8 +11,9 @@ use crate::error::ConfigError;
 
 /// The `format` tag of contact-floor files.
 pub const CONTACT_FLOOR_FORMAT: &str = "admittance-contact-floor";
-/// The `format_version` this build writes and reads.
-pub const CONTACT_FLOOR_FORMAT_VERSION: u64 = 1;
+/// The `format_version` this build writes (it reads 1 too: version 2 added the levels'
+/// drop away from rest, absent in 1).
+pub const CONTACT_FLOOR_FORMAT_VERSION: u64 = 2;
 
 fn err(path: &Path, m: impl std::fmt::Display) -> ConfigError {
     ConfigError::new(path.display().to_string(), m.to_string())
@@ -76,12 +77,12 @@ fn read_envelope(path: &Path) -> Result<Value, ConfigError> {
         ));
     }
     match v.get("format_version").and_then(Value::as_u64) {
-        Some(CONTACT_FLOOR_FORMAT_VERSION) => {}
+        Some(1 | CONTACT_FLOOR_FORMAT_VERSION) => {}
         other => {
             return Err(err(
                 path,
                 format!(
-                "format_version {other:?}: this build reads version {CONTACT_FLOOR_FORMAT_VERSION}"
+                "format_version {other:?}: this build reads versions 1 to {CONTACT_FLOOR_FORMAT_VERSION}"
             ),
             ))
         }

@@ -6,14 +6,22 @@ use std::fmt::Write as _;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use super::spread::LevelShape;
 use crate::error::ConfigError;
 
 /// Per-joint thresholds on the external-torque estimate for a stated false-alarm rate
 /// (issue 31; docs/method.md section 5, "Contact").
 ///
 /// At joint velocity `qdot_i` and acceleration `qddot_i`, joint `i`'s contact level is
-/// `contact_thresholds[i] * (1 + speed_gain[i] |qdot_i| + acceleration_gain[i] |qddot_i|)`
-/// (the estimate's spread grows so on the calibration motion), the collision level likewise
+/// `contact_thresholds[i]` (its level at standstill) times [`LevelShape::factor`],
+///
+/// ```text
+///   1 + speed_gain |qdot| + acceleration_gain |qddot| + knee_gain (|qdot| - knee_speed)+
+///     + reversal_gain |qddot| r - moving_drop (1 - r),   r = exp(-(qdot / rest_width)^2)
+/// ```
+///
+/// (the estimate's spread changes so on the calibration motion: it grows with speed and
+/// acceleration and peaks at reversals, the higher the sharper), the collision level likewise
 /// with `collision_thresholds`; a flag raised at a level is released below
 /// `release_fraction` of it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -30,6 +38,23 @@ pub struct ContactFloor {
     pub speed_gain: Vec<f64>,
     /// Relative growth of both levels with `|qddot_i|` (1 per rad/s^2, >= 0).
     pub acceleration_gain: Vec<f64>,
+    /// The fraction both levels drop by once the joint moves faster than `rest_width` (in
+    /// `[0, 1)`). This and the next four are empty in floors of format version 1 (no drop,
+    /// no knee, no reversal gain), else one value per joint.
+    #[serde(default)]
+    pub moving_drop: Vec<f64>,
+    /// The velocity width of the rest peak (rad/s, > 0).
+    #[serde(default)]
+    pub rest_width: Vec<f64>,
+    /// Relative growth of both levels with `|qddot_i|` at a reversal (1 per rad/s^2, >= 0).
+    #[serde(default)]
+    pub reversal_gain: Vec<f64>,
+    /// The speed beyond which the levels grow by `knee_gain` more (rad/s, >= 0).
+    #[serde(default)]
+    pub knee_speed: Vec<f64>,
+    /// Relative growth of both levels per rad/s beyond `knee_speed` (>= 0).
+    #[serde(default)]
+    pub knee_gain: Vec<f64>,
     /// A joint's flag is released when its estimate falls below this fraction of the level
     /// that raised it (in `(0, 1]`).
     pub release_fraction: f64,
@@ -109,6 +134,7 @@ impl ContactFloor {
                 ));
             }
         }
+        self.validate_shapes(n)?;
         if !self.joints.is_empty() && self.joints.len() != n {
             return Err(ConfigError::new(
                 "joints",
@@ -169,10 +195,70 @@ impl ContactFloor {
         Ok(())
     }
 
-    /// Joint `i`'s growth factor of both levels at this velocity and acceleration.
+    /// Joint `i`'s factor on both levels at this velocity and acceleration (1 at standstill;
+    /// the struct's formula).
     #[inline]
     pub fn scale(&self, i: usize, qdot: f64, qddot: f64) -> f64 {
-        1.0 + self.speed_gain[i] * qdot.abs() + self.acceleration_gain[i] * qddot.abs()
+        self.shape(i).factor(qdot, qddot)
+    }
+
+    /// Joint `i`'s level shape (zeros for the terms a version-1 floor does not have).
+    #[inline]
+    pub fn shape(&self, i: usize) -> LevelShape {
+        let at = |v: &[f64], default: f64| v.get(i).copied().unwrap_or(default);
+        LevelShape {
+            speed_gain: self.speed_gain[i],
+            acceleration_gain: self.acceleration_gain[i],
+            moving_drop: at(&self.moving_drop, 0.0),
+            rest_width: at(&self.rest_width, 1.0),
+            reversal_gain: at(&self.reversal_gain, 0.0),
+            knee_speed: at(&self.knee_speed, 0.0),
+            knee_gain: at(&self.knee_gain, 0.0),
+        }
+    }
+
+    /// The shape terms of format version 2: all empty or one per joint, each in its range.
+    fn validate_shapes(&self, n: usize) -> Result<(), ConfigError> {
+        let terms: [(&str, &Vec<f64>, f64, f64); 5] = [
+            ("moving_drop", &self.moving_drop, 0.0, 1.0),
+            (
+                "rest_width",
+                &self.rest_width,
+                f64::MIN_POSITIVE,
+                f64::INFINITY,
+            ),
+            ("reversal_gain", &self.reversal_gain, 0.0, f64::INFINITY),
+            ("knee_speed", &self.knee_speed, 0.0, f64::INFINITY),
+            ("knee_gain", &self.knee_gain, 0.0, f64::INFINITY),
+        ];
+        let given = self.moving_drop.len();
+        for (key, v, low, high) in terms {
+            if v.len() != given || (given != 0 && given != n) {
+                return Err(ConfigError::new(
+                    key,
+                    format!(
+                        "has {} values: moving_drop, rest_width, reversal_gain, knee_speed and \
+                         knee_gain are all empty or all have one value per joint ({n})",
+                        v.len()
+                    ),
+                ));
+            }
+            for (i, &x) in v.iter().enumerate() {
+                if !(x.is_finite() && x >= low && x < high) {
+                    return Err(ConfigError::new(
+                        format!("{key}[{i}]"),
+                        format!("is {x}: must be finite, >= {low} and < {high}"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Joint `i`'s contact level (N m) at this velocity and acceleration.
+    #[inline]
+    pub fn contact_level(&self, i: usize, qdot: f64, qddot: f64) -> f64 {
+        self.contact_thresholds[i] * self.scale(i, qdot, qddot)
     }
 
     /// The floor as a table, one row per joint, with its guarantee and assumption.
@@ -185,12 +271,13 @@ impl ContactFloor {
         );
         let _ = writeln!(
             s,
-            "{:<14} {:>9} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}",
+            "{:<14} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}",
             "joint",
             "rms",
             "contact",
             "collision",
             "smallest",
+            "moving",
             "/(rad/s)",
             "max|qdot|",
             "max|qddot|"
@@ -204,12 +291,14 @@ impl ContactFloor {
                 .unwrap_or_else(|| format!("{i}"));
             let _ = writeln!(
                 s,
-                "{:<14} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>10.2} {:>10.2}",
+                "{:<14} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>10.2} {:>10.2}",
                 name,
                 c.rms.get(i).copied().unwrap_or(f64::NAN),
                 self.contact_thresholds[i],
                 self.collision_thresholds[i],
                 c.smallest_detected.get(i).copied().unwrap_or(f64::NAN),
+                self.contact_thresholds[i]
+                    * (1.0 - self.moving_drop.get(i).copied().unwrap_or(0.0)),
                 self.speed_gain[i],
                 c.max_abs_qdot.get(i).copied().unwrap_or(f64::NAN),
                 c.max_abs_qddot.get(i).copied().unwrap_or(f64::NAN),
@@ -217,7 +306,8 @@ impl ContactFloor {
         }
         let _ = writeln!(
             s,
-            "(N m; levels at rest, growing by the factor 1 + gain |qdot| + gain_acc |qddot|)"
+            "(N m; levels at standstill; moving: the contact level once the joint moves, before \
+             it grows by 1 + gain |qdot| + gain_acc |qddot|)"
         );
         let _ = write!(s, "{}", c.assumption);
         s

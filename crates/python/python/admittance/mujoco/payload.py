@@ -188,6 +188,7 @@ def main(argv=None):
     p.add_argument("--training-duration", type=float, default=60.0)
     p.add_argument("--payload-duration", type=float, default=20.0)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--input-filter-hz", type=float, default=10.0, help="the input conditioning's cut-off, Hz (10, as the arms table; 0: raw signals)")
     p.add_argument("--out", help="write the numbers to this JSON file")
     a = p.parse_args(argv)
     try:
@@ -198,7 +199,16 @@ def main(argv=None):
     payload = dict(DEFAULT_PAYLOAD, mass=a.mass, com=[float(v) for v in a.com.split(",")])
     if len(payload["com"]) != 3 or not a.mass > 0:
         p.error("--com needs three numbers and --mass a positive number")
-    cfg = PayloadConfig(arm=a.arm, training_duration=a.training_duration, payload_duration=a.payload_duration, payload=payload, seed=a.seed)
+    if not (math.isfinite(a.input_filter_hz) and a.input_filter_hz >= 0):
+        p.error("--input-filter-hz needs a cut-off >= 0 Hz (0: raw signals)")
+    cfg = PayloadConfig(
+        arm=a.arm,
+        training_duration=a.training_duration,
+        payload_duration=a.payload_duration,
+        payload=payload,
+        seed=a.seed,
+        input_filter_hz=a.input_filter_hz,
+    )
     r = run_payload(cfg, log=lambda s: print(s, file=sys.stderr))
     print(f"{r['arm']} (tip {r['tip']}): payload {r['true']['mass']:.3f} kg identified as {r['identified']['mass']:.4f} kg "
           f"({100 * r['mass_error_relative']:.2f} %), centre of mass off by {100 * r['com_error_m']:.2f} cm")
