@@ -446,6 +446,7 @@ class VariantRecorder:
         duration: float,
         evaluation_start: float,
         decimation: int = 10,
+        contact_floor: Optional["ContactFloor"] = None,
     ) -> None: ...
     def add(
         self,
@@ -723,15 +724,20 @@ def load_identification(path: StrPath, m: Optional[Model] = None) -> Identificat
 
 
 class ContactFloor:
-    """Per-joint contact and collision thresholds (N m at rest) for a stated false-alarm rate
-    (``calibrate_contact``, ``load_contact_floor``)."""
+    """Per-joint contact and collision thresholds (N m at standstill) for a stated false-alarm
+    rate (``calibrate_contact``, ``load_contact_floor``)."""
 
     @property
     def contact_thresholds(self) -> Vector:
-        """Contact level per joint at rest (N m), ``(n,)``."""
+        """Contact level per joint at standstill (N m), ``(n,)``."""
     @property
     def collision_thresholds(self) -> Vector:
-        """Collision level per joint at rest (N m), ``(n,)``."""
+        """Collision level per joint at standstill (N m), ``(n,)``."""
+    @property
+    def moving_drop(self) -> Vector:
+        """The fraction the levels drop by once the joint moves, ``(n,)``."""
+    def contact_levels(self, qdot: ArrayLike, qddot: ArrayLike) -> npt.NDArray[np.float64]:
+        """The detector's contact levels (N m) at this motion, ``(n,)`` or ``(N, n)``."""
     @property
     def speed_gain(self) -> Vector:
         """Relative growth of the levels per rad/s, ``(n,)``."""
@@ -783,7 +789,7 @@ class ContactDetector:
         """The last joint whose estimate is significant, -1 when none."""
 
 def calibrate_contact(
-    data: Union[StrPath, Dict[str, ArrayLike]],
+    data: Union[StrPath, Dict[str, ArrayLike], List[Union[StrPath, Dict[str, ArrayLike]]]],
     ident: Identification,
     false_alarms_per_hour: float = 1.0,
     gain: float = 50.0,
