@@ -21,11 +21,13 @@ mod excitation;
 mod excitation_settings;
 mod file;
 mod fit;
+mod held_out;
 mod joint_terms;
 mod normal;
 mod payload;
 mod samples;
 mod settings;
+mod springs;
 
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;
