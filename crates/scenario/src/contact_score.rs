@@ -130,9 +130,14 @@ pub(crate) fn score(
                 delays.push(delay);
             }
         }
-        let peak = (a..b)
-            .max_by(|&x, &y| row_max(true_torque, x, n).total_cmp(&row_max(true_torque, y, n)))
-            .unwrap_or(a);
+        // The first sample of the largest true torque (a plateau's start, not its end).
+        let peak = (a..b).fold(a, |best, k| {
+            if row_max(true_torque, k, n) > row_max(true_torque, best, n) {
+                k
+            } else {
+                best
+            }
+        });
         let true_last = (0..n).rev().find(|&i| ratio(peak, i) > 1.0);
         // Joints beyond the touched link carry no torque of the push at all.
         let largest = row_max(true_torque, peak, n);
@@ -308,5 +313,21 @@ mod tests {
         let m = run(&flags, &torque);
         assert_eq!(m.contact_isolation, Some(1.0));
         assert_eq!(m.contact_isolation_strict, Some(1.0));
+    }
+
+    /// A push held at its peak is scored at the plateau's start: 50 ms later it still
+    /// loads the joint, though the plateau ends right after.
+    #[test]
+    fn a_plateau_is_scored_from_its_start() {
+        let mut torque = vec![[0.0; 2]; 12];
+        for t in torque.iter_mut().take(10).skip(3) {
+            *t = [0.0, 3.0];
+        }
+        let mut flags = vec![(false, -1); 12];
+        for f in flags.iter_mut().take(10).skip(3) {
+            *f = (true, 1);
+        }
+        let m = run(&flags, &torque);
+        assert_eq!(m.contact_isolation, Some(1.0));
     }
 }
