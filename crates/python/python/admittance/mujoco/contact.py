@@ -201,13 +201,16 @@ def run_arm(name, args, log=print):
 
     # The floor's data and the free motion as recordings of ``--segment`` s, each a motion
     # of its own seed (periods drawn anew: other speeds), as a user records several motions.
+    # --seed S moves every motion the floor and the detector see to other seeds (the
+    # identification's recordings stay): the same experiment on other motion.
+    base = 1000 * args.seed
     for k, total, seed in (("calib", args.calibration, 4), ("free", args.free, 5)):
         count = max(1, round(total / args.segment)) if args.segment > 0 else 1
-        seeds = [seed] + [10 * seed + i for i in range(1, count)]
+        seeds = [base + seed] + [base + 10 * seed + i for i in range(1, count)]
         # Each recording's first second (the filters' and the observer's start) is left out
         # of the floor and of the counts: it is added, so that ``total`` s are counted.
         motions[k] = [motion(s, total / count + WARM_UP_S) for s in seeds]
-    motions["push"] = motion(6, args.push_seconds)
+    motions["push"] = motion(base + 6, args.push_seconds)
     gains = recording_gains(m, q0, arm.terms)
     rng = np.random.default_rng(1)
     rec = {k: record(arm, m, motions[k], gains, cfg, rng)[0] for k in ("train", "valid")}
@@ -247,7 +250,7 @@ def run_arm(name, args, log=print):
     # Pushes on three links during motion the floor never saw.
     n = m.n
     links = sorted({n - 1, n // 2, 1})
-    prng = np.random.default_rng(7)
+    prng = np.random.default_rng(7 + base)
     pushes = []
     t_now = 2.0
     for rep in range(args.repeats):
@@ -329,6 +332,7 @@ def main(argv=None):
     ap.add_argument("--rate", type=float, default=1.0, help="false alarms per hour promised")
     ap.add_argument("--calibration", type=float, default=300.0, help="s of free motion for the floor")
     ap.add_argument("--free", type=float, default=600.0, help="s of new free motion")
+    ap.add_argument("--seed", type=int, default=0, help="other motions for the floor, the free test and the pushes (0: the documented ones)")
     ap.add_argument("--segment", type=float, default=60.0, help="s per recording of the floor's data and of the free motion (0: one recording each)")
     ap.add_argument("--push-seconds", type=float, default=95.0)
     ap.add_argument("--forces", type=float, nargs="+", default=[2.0, 5.0, 10.0, 20.0, 40.0])
