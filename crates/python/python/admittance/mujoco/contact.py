@@ -27,7 +27,9 @@ filter, 10 Hz input conditioning, the momentum observer on the identification, K
    with the same hysteresis: 1.5 times the largest estimate seen on the calibration motion
    ("peak + margin"), and 10 % of the joint's effort limit ("catalogue default").
 
-``python -m admittance.mujoco.contact --arms panda ur5 --out runs/contact`` writes
+``python -m admittance.mujoco.contact --arms panda ur5 --out runs/contact`` writes a folder
+per arm (``admittance.sweep`` jobs, ``--jobs`` at a time, default every core, or on a Ray
+cluster with ``--ray``; an arm finished with the same settings is kept), then
 ``results.json`` and ``table.md`` there.
 """
 
@@ -37,6 +39,7 @@ import argparse
 import json
 import math
 import pathlib
+import sys
 import time
 from dataclasses import replace
 
@@ -44,7 +47,7 @@ import numpy as np
 
 import admittance as adm
 
-from ._arms import ARMS, ArmsConfig, conditioned, excitation_motion, record, recording_gains, robots_dir
+from ._arms import ARMS, ArmsConfig, _write_atomic, conditioned, excitation_motion, record, recording_gains, robots_dir
 from ._cosim import _multisine
 from ._plant import MujocoArm
 
@@ -339,16 +342,42 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--motion", choices=["multisine", "excitation"], default="multisine",
                     help="the motion of the floor's data, the free test and the pushes")
+    ap.add_argument("--jobs", type=int, default=None, help="arms at once, each in a process of its own (default: every core)")
+    ap.add_argument("--ray", metavar="ADDRESS", help="run the arms on the Ray cluster at ADDRESS ('auto', 'local', or ray://HOST:PORT)")
+    ap.add_argument("--force", action="store_true", help="replace arm folders in --out that hold other settings")
     args = ap.parse_args(argv)
+    if args.jobs is not None and args.jobs < 1:
+        ap.error("--jobs must be at least 1")
+    unknown = sorted(set(args.arms) - set(ARMS))
+    if unknown:
+        ap.error(f"unknown arm {unknown[0]!r}: choose among {', '.join(ARMS)}")
+    from admittance import sweep
+
     out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    results = []
-    for name in args.arms:
-        results.append(run_arm(name, args))
-        (out / "results.json").write_text(json.dumps({"args": vars(args), "arms": results}, indent=1))
-        (out / "table.md").write_text(table(results, args))
+    settings = {k: v for k, v in vars(args).items() if k not in ("arms", "out", "jobs", "ray", "force")}
+    # Each arm is a job of its own (admittance.sweep): a folder per arm, kept across runs
+    # with the same settings; the arms' results do not depend on how many run at once.
+    jobs = [sweep.call_job("admittance.mujoco.contact:arm_job", {"name": name, "settings": settings}, name) for name in args.arms]
+    try:
+        done = sweep.run_sweep(jobs, out, args.jobs, args.ray, 0, args.force)
+    except (sweep.SweepError, OSError) as e:
+        print(f"admittance.mujoco.contact: {e}", file=sys.stderr)
+        return 3
+    results = [json.loads((out / name / sweep.RESULT_FILE).read_text()) for name in args.arms if name not in done.failed]
+    _write_atomic(out / "results.json", json.dumps({"args": vars(args), "arms": results}, indent=1))
+    _write_atomic(out / "table.md", table(results, args))
     print(table(results, args))
+    if done.failed:
+        print(f"failed: {', '.join(done.failed)} (their folders in {out} say why)", file=sys.stderr)
+        return 1
+    return 0
+
+
+def arm_job(folder, name, settings):
+    """One arm as a sweep job: ``run_arm`` with the command's settings; its result is the
+    job's ``result.json``."""
+    return run_arm(name, argparse.Namespace(**settings), log=lambda s: None)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
