@@ -2,18 +2,20 @@
 
 use std::fmt;
 
-/// A configuration value that cannot be used, named by its key.
+/// A configuration value that cannot be used, named by its key: the one shape of a bad
+/// setting in the project (issue 32).
 ///
 /// `key` is the dotted path of the offending field inside the configuration struct
 /// (`"saturation.rho"`, `"k1[3]"`, `"f_network.width"`), so that a scenario loader can map
 /// it to a file and line; `message` says what is wrong, `hint` how to fix it when there is
-/// more to say than the bound. Every layer above keeps the three (issue 32: one keyed shape
-/// from here to `adm_last_error`): the loop puts its table before the key, a scenario file
-/// locates it at its line, and each front end shows [`ConfigError::text`].
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("`{key}`: {message}")]
+/// more to say than the bound. Every layer above keeps the three: a caller that nests the
+/// settings under a table puts the table before the key ([`ConfigError::within`]), the
+/// layer that read the file locates it (a scenario at its line, the loop in `loop.toml`),
+/// and every front end (`adm_last_error`, Python, the command line) shows the same
+/// one-line text, `` key `k`: message; hint: ... ``.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ConfigError {
-    /// Dotted path of the offending field.
+    /// Dotted path of the offending field (empty: the settings as a whole).
     pub key: String,
     /// What is wrong.
     pub message: String,
@@ -31,18 +33,37 @@ impl ConfigError {
         }
     }
 
+    /// A deserialiser's complaint at `key` (an unknown field, a wrong type, a missing
+    /// field), with the fix for its kind: the same for a scenario file, a loop file and a
+    /// Python dict.
+    pub fn unreadable(key: impl Into<String>, message: impl std::fmt::Display) -> Self {
+        let message = message.to_string().trim().replace('\n', " ");
+        let hint = if message.contains("unknown field") {
+            Some("remove the key or fix its spelling; the expected keys are listed")
+        } else if message.contains("invalid type") {
+            Some("check the value's type (number, string, list, table)")
+        } else if message.contains("missing field") {
+            Some("add the key to the table")
+        } else {
+            None
+        };
+        let error = ConfigError::new(key, message);
+        match hint {
+            Some(h) => error.hint(h),
+            None => error,
+        }
+    }
+
     /// The same error with a hint.
     pub fn hint(mut self, text: impl Into<String>) -> Self {
         self.hint = Some(text.into());
         self
     }
 
-    /// The error with its hint, as one line (`` `key`: message; hint: ... ``).
+    /// The one-line text every front end shows (`` key `k`: message; hint: ... ``); the
+    /// same as `to_string()`.
     pub fn text(&self) -> String {
-        match &self.hint {
-            Some(h) => format!("{self}; hint: {h}"),
-            None => self.to_string(),
-        }
+        self.to_string()
     }
 
     /// The same error with `prefix.` put in front of the key.
@@ -57,6 +78,21 @@ impl ConfigError {
         self
     }
 }
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if !self.key.is_empty() {
+            write!(f, "key `{}`: ", self.key)?;
+        }
+        f.write_str(&self.message)?;
+        if let Some(h) = &self.hint {
+            write!(f, "; hint: {h}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ConfigError {}
 
 /// Why a step did not run its normal law (see [`crate::SafeHold`] for what is written
 /// instead).

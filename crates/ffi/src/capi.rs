@@ -135,7 +135,7 @@ unsafe fn create(config: *const AdmConfig) -> Result<AdmHandle, String> {
     if wrench {
         engine
             .enable_wrench(c.wrench_damping)
-            .map_err(|e| format!("AdmConfig.wrench_damping: {}", e.text()))?;
+            .map_err(|e| e.within("AdmConfig").text())?;
     }
     let n = engine.dof();
     if c.n_joints as usize != n {

@@ -131,6 +131,19 @@ fn create_errors_name_what_is_wrong() {
             "7 joints",
         ],
     );
+    // The very text of the loop's own error: one shape, one text (issue 32, item 5).
+    let text = admittance_loop::RobotLoop::load(&dir, &["controller.pd.kp = [1.0, 2.0]"])
+        .err()
+        .unwrap()
+        .text();
+    assert_eq!(create_error(), text);
+
+    let mut c = config(&path);
+    c.wrench_damping = -1.0;
+    create_fails(
+        &c,
+        &["key `AdmConfig.wrench_damping`: must be finite and >= 0"],
+    );
 
     let overrides = CString::new("observer.kind = \"oracle\"").unwrap();
     let mut c = config(&path);

@@ -62,11 +62,9 @@ impl<Training> LoopConfig<Training> {
     }
 }
 
+/// A component's error at its key under the component's table (`controller.neural`).
 fn component(section: &str, source: ConfigError) -> LoopError {
-    LoopError::Component {
-        section: section.to_string(),
-        source,
-    }
+    source.within(section).into()
 }
 
 fn controller(nominal: Arc<Model>, c: &ControllerConfig) -> Result<LoopController, LoopError> {
@@ -132,9 +130,8 @@ fn observer<Training>(
     trained: Option<BroadModel>,
 ) -> Result<Option<(Box<dyn Observer + Send>, Vec<f64>)>, LoopError> {
     let spec = &config.observer;
-    let momentum_err =
-        |e: ConfigError| LoopError::invalid(format!("observer.momentum.{}", e.key), e.message);
-    let momentum = || {
+    let momentum_err = |e: ConfigError| component("observer.momentum", e);
+    let momentum = || -> Result<_, LoopError> {
         if let Some(path) = &spec.identification {
             let ident = admittance_dynamics::Identification::load(path, model)
                 .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?;
@@ -149,6 +146,18 @@ fn observer<Training>(
             MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)?;
         Ok((observer, Vec::new()))
     };
+    // A network of the wrong shape (its key in the observer is `model`) is at fault where
+    // it came from: the file `observer.network`, or the training of the caller's.
+    let network_key = match (&trained, &spec.network) {
+        (None, Some(_)) => "observer.network",
+        _ => "observer.training",
+    };
+    let network_err = |e: ConfigError| {
+        LoopError::from(ConfigError {
+            key: network_key.into(),
+            ..e
+        })
+    };
     let network = || {
         match (trained, &spec.network) {
         (Some(trained), _) => Ok(trained),
@@ -160,7 +169,6 @@ fn observer<Training>(
         .hint("name it in observer.network (admittance train writes one), or let the scenario runner train it from [observer.training]")),
     }
     };
-    let network_err = |e: ConfigError| LoopError::invalid("observer.training", e.to_string());
     Ok(match spec.kind {
         ObserverKind::None | ObserverKind::Oracle => None,
         ObserverKind::Momentum => {

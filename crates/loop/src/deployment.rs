@@ -44,10 +44,6 @@ pub struct Deployment {
     files: BTreeMap<String, Vec<u8>>,
 }
 
-fn folder_err(dir: &Path, message: impl Into<String>) -> LoopError {
-    LoopError::invalid(dir.display().to_string(), message)
-}
-
 fn redeploy() -> &'static str {
     "write the folder again with `admittance deploy SCENARIO --out DIR`"
 }
@@ -63,19 +59,19 @@ impl Deployment {
     pub fn load_with(dir: &Path, overrides: &[&str]) -> Result<Self, LoopError> {
         let manifest_path = dir.join(MANIFEST_FILE);
         if !dir.is_dir() {
-            return Err(folder_err(
+            return Err(LoopError::file(
                 dir,
                 "is not a deployment folder (a folder with manifest.json and loop.toml)",
             )
             .hint(redeploy()));
         }
         let manifest: Value = read(&manifest_path, admittance_files::TEXT_LIMIT).and_then(|b| {
-            serde_json::from_slice(&b).map_err(|e| folder_err(&manifest_path, e.to_string()))
+            serde_json::from_slice(&b).map_err(|e| LoopError::file(&manifest_path, e.to_string()))
         })?;
         if manifest.get("format").and_then(Value::as_str) != Some(DEPLOYMENT_FORMAT)
             || manifest.get("version").and_then(Value::as_u64) != Some(DEPLOYMENT_VERSION)
         {
-            return Err(folder_err(
+            return Err(LoopError::file(
                 &manifest_path,
                 format!("is not a {DEPLOYMENT_FORMAT} manifest of version {DEPLOYMENT_VERSION}"),
             )
@@ -84,7 +80,9 @@ impl Deployment {
         let listed = manifest
             .get("files")
             .and_then(Value::as_object)
-            .ok_or_else(|| folder_err(&manifest_path, "has no `files` table").hint(redeploy()))?;
+            .ok_or_else(|| {
+                LoopError::file(&manifest_path, "has no `files` table").hint(redeploy())
+            })?;
         let mut files = BTreeMap::new();
         for (name, entry) in listed {
             let path = safe_join(dir, name)?;
@@ -93,7 +91,7 @@ impl Deployment {
             let found = format!("{:016x}", fnv1a64(&bytes));
             let size = entry.get("bytes").and_then(Value::as_u64);
             if want != found || size != Some(bytes.len() as u64) {
-                return Err(folder_err(
+                return Err(LoopError::file(
                     &path,
                     format!(
                         "does not match the manifest (checksum {found}, {} bytes; manifest: {want}, {size:?} bytes): edited or replaced after deployment",
@@ -105,11 +103,11 @@ impl Deployment {
             files.insert(name.clone(), bytes);
         }
         let loop_text = files.get(LOOP_FILE).ok_or_else(|| {
-            folder_err(&manifest_path, "does not list loop.toml").hint(redeploy())
+            LoopError::file(&manifest_path, "does not list loop.toml").hint(redeploy())
         })?;
         let loop_path = dir.join(LOOP_FILE);
         let text = std::str::from_utf8(loop_text)
-            .map_err(|e| folder_err(&loop_path, format!("not UTF-8: {e}")))?;
+            .map_err(|e| LoopError::file(&loop_path, format!("not UTF-8: {e}")))?;
         let config = RobotConfig::from_toml_with(text, &loop_path, overrides)?;
         let deployment = Self {
             dir: dir.to_path_buf(),
@@ -138,13 +136,10 @@ impl Deployment {
             if self.file_bytes(path).is_none() {
                 return Err(LoopError::invalid(
                     key,
-                    format!(
-                        "{}: `{}` is not a file the manifest lists",
-                        self.dir.join(LOOP_FILE).display(),
-                        path.display()
-                    ),
+                    format!("`{}` is not a file the manifest lists", path.display()),
                 )
-                .hint(redeploy()));
+                .hint(redeploy())
+                .located(&self.dir.join(LOOP_FILE)));
             }
         }
         Ok(())
@@ -171,8 +166,8 @@ fn safe_join(dir: &Path, name: &str) -> Result<PathBuf, LoopError> {
     if plain {
         Ok(dir.join(name))
     } else {
-        Err(folder_err(
-            &dir.join(MANIFEST_FILE),
+        Err(LoopError::file(
+            dir.join(MANIFEST_FILE),
             format!("lists `{name}`, which is not a plain file name of the folder"),
         ))
     }
@@ -180,7 +175,7 @@ fn safe_join(dir: &Path, name: &str) -> Result<PathBuf, LoopError> {
 
 fn read(path: &Path, limit: u64) -> Result<Vec<u8>, LoopError> {
     admittance_files::read_regular(path, limit)
-        .map_err(|e| folder_err(path, format!("cannot be read: {e}")).hint(redeploy()))
+        .map_err(|e| LoopError::file(path, format!("cannot be read: {e}")).hint(redeploy()))
 }
 
 /// Writes a deployment folder: `files` (name, bytes; `loop.toml` among them) and the
@@ -193,22 +188,22 @@ pub fn write_deployment(
 ) -> Result<(), LoopError> {
     if dir.exists() {
         let empty = std::fs::read_dir(dir)
-            .map_err(|e| folder_err(dir, e.to_string()))?
+            .map_err(|e| LoopError::file(dir, e.to_string()))?
             .next()
             .is_none();
         if !empty && !dir.join(MANIFEST_FILE).is_file() {
-            return Err(folder_err(
+            return Err(LoopError::file(
                 dir,
                 "exists and is not a deployment folder: not overwritten (choose another --out)",
             ));
         }
     }
-    std::fs::create_dir_all(dir).map_err(|e| folder_err(dir, e.to_string()))?;
+    std::fs::create_dir_all(dir).map_err(|e| LoopError::file(dir, e.to_string()))?;
     let mut listed = serde_json::Map::new();
     for (name, bytes) in files {
         let path = safe_join(dir, name)?;
         admittance_files::write_atomic(&path, bytes)
-            .map_err(|e| folder_err(&path, format!("cannot write: {e}")))?;
+            .map_err(|e| LoopError::file(&path, format!("cannot write: {e}")))?;
         listed.insert(
             name.clone(),
             json!({"bytes": bytes.len(), "fnv1a64": format!("{:016x}", fnv1a64(bytes))}),
@@ -224,5 +219,5 @@ pub fn write_deployment(
     let text = serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n";
     let path = dir.join(MANIFEST_FILE);
     admittance_files::write_atomic(&path, text.as_bytes())
-        .map_err(|e| folder_err(&path, format!("cannot write: {e}")))
+        .map_err(|e| LoopError::file(&path, format!("cannot write: {e}")))
 }

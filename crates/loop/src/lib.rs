@@ -70,6 +70,8 @@ mod signal;
 mod stage;
 mod validate;
 
+/// The one shape of a bad setting (issue 32), which [`LoopError::Setting`] holds.
+pub use admittance_control::ConfigError;
 /// The contact flags a [`RobotStatus`] carries (issue 31).
 pub use admittance_control::ContactState;
 pub use chain::SignalChain;

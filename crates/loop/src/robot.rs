@@ -138,13 +138,13 @@ impl RobotLoop {
         let n = model.nq();
         let rate = config.control_rate_hz;
         let chain = SignalChain::new(n, config.signals.filter_cutoff_hz, rate)
-            .map_err(|e| LoopError::invalid("signals.filter_cutoff_hz", e.to_string()))?;
+            .map_err(|e| e.at("signals.filter_cutoff_hz"))?;
         let gates = PlausibilityGates::new(&model, &config.signals.gates, 1.0 / rate)?;
         let floor = match (floor, &config.contact) {
             (Some(f), _) => Some(f),
             (None, Some(section)) => Some(
                 ContactFloor::load(&folder.join(&section.floor))
-                    .map_err(|e| LoopError::invalid("contact.floor", e.to_string()))?,
+                    .map_err(|e| LoopError::from(e.within("contact.floor")))?,
             ),
             (None, None) => None,
         };
@@ -156,10 +156,7 @@ impl RobotLoop {
                         format!("has {} joints, the arm {n}", f.dof()),
                     ));
                 }
-                ContactDetector::new(&f).map_err(|e| LoopError::Component {
-                    section: "contact.floor".into(),
-                    source: e,
-                })
+                ContactDetector::new(&f).map_err(|e| LoopError::from(e.within("contact.floor")))
             })
             .transpose()?;
         if let (Some(det), true) = (
@@ -174,17 +171,12 @@ impl RobotLoop {
             };
             compliance
                 .set_deadband(&det.floor().contact_thresholds)
-                .map_err(|e| LoopError::Component {
-                    section: "contact.deadband".into(),
-                    source: e,
-                })?;
+                .map_err(|e| LoopError::from(e.within("contact.deadband")))?;
         }
         let contact_wrench = match &contact {
             Some(_) => Some((
-                WrenchEstimator::new(&model, 0.0).map_err(|e| LoopError::Component {
-                    section: "contact".into(),
-                    source: e,
-                })?,
+                WrenchEstimator::new(&model, 0.0)
+                    .map_err(|e| LoopError::from(e.within("contact")))?,
                 link_frames(&model),
             )),
             None => None,
@@ -254,13 +246,7 @@ impl RobotLoop {
     /// Estimate the hand wrench each step with the damped pseudo-inverse of damping
     /// `damping` (0 picks the default).
     pub fn enable_wrench(&mut self, damping: f64) -> Result<(), LoopError> {
-        self.wrench =
-            Some(
-                WrenchEstimator::new(&self.model, damping).map_err(|e| LoopError::Component {
-                    section: String::new(),
-                    source: e,
-                })?,
-            );
+        self.wrench = Some(WrenchEstimator::new(&self.model, damping)?);
         Ok(())
     }
 

@@ -27,7 +27,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use admittance_control::TaskSpaceAdmittanceConfig;
+use admittance_control::{ConfigError, TaskSpaceAdmittanceConfig};
 use admittance_dynamics::UrdfOptions;
 use serde::{Deserialize, Serialize};
 
@@ -188,25 +188,24 @@ impl RobotConfig {
     /// As [`RobotConfig::from_toml`], with `KEY=VALUE` overrides applied in order (the
     /// value is TOML: `3.0`, `[1, 2]`, `"text"`; a bare word is taken as a string).
     pub fn from_toml_with(text: &str, file: &Path, overrides: &[&str]) -> Result<Self, LoopError> {
-        let at = |e: String| LoopError::invalid(file.display().to_string(), e);
-        let mut table: toml::Table = toml::from_str(text).map_err(|e| at(e.to_string()))?;
+        let mut table: toml::Table =
+            toml::from_str(text).map_err(|e| LoopError::file(file, e.to_string().trim()))?;
         for o in overrides {
             set_key(&mut table, o)?;
         }
         let config: RobotConfig = table
             .try_into()
-            .map_err(|e: toml::de::Error| at(e.to_string()))?;
+            .map_err(|e: toml::de::Error| unreadable(e).located(file))?;
         if config.format != LOOP_FILE_FORMAT || config.version != LOOP_FILE_VERSION {
             return Err(LoopError::invalid(
                 "format",
                 format!(
-                    "{}: format {:?} version {}, this library reads {LOOP_FILE_FORMAT:?} version {LOOP_FILE_VERSION}",
-                    file.display(),
-                    config.format,
-                    config.version
+                    "format {:?} version {}, this library reads {LOOP_FILE_FORMAT:?} version {LOOP_FILE_VERSION}",
+                    config.format, config.version
                 ),
             )
-            .hint("write it again with `admittance deploy`"));
+            .hint("write it again with `admittance deploy`")
+            .located(file));
         }
         Ok(config)
     }
@@ -242,6 +241,28 @@ impl RobotConfig {
         out.extend(self.loop_config(Path::new(".")).problems());
         out
     }
+}
+
+/// A deserialisation error of the loop file's table at its key: toml names the table path
+/// only in its text (`in `a.b``), and an unknown field only in its message; the key is
+/// the field's, as a scenario file's or a Python dict's would be.
+fn unreadable(e: toml::de::Error) -> LoopError {
+    let text = e.to_string();
+    let table = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("in `")?.strip_suffix('`'))
+        .next_back()
+        .unwrap_or("");
+    let unknown = e
+        .message()
+        .strip_prefix("unknown field `")
+        .and_then(|rest| rest.split('`').next());
+    let key = match unknown {
+        Some(field) if table.is_empty() => field.to_string(),
+        Some(field) => format!("{table}.{field}"),
+        None => table.to_string(),
+    };
+    ConfigError::unreadable(key, e.message()).into()
 }
 
 /// Sets `KEY=VALUE` (a dotted key) in `table`.

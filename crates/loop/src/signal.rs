@@ -30,7 +30,7 @@ impl LowPass {
         if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(LoopError::invalid(
                 "sample_rate_hz",
-                format!("must be > 0, got {sample_rate_hz}"),
+                format!("the sample rate must be > 0, got {sample_rate_hz}"),
             ));
         }
         if !(cutoff_hz.is_finite() && cutoff_hz >= 0.0 && cutoff_hz < 0.5 * sample_rate_hz) {

@@ -53,7 +53,7 @@ impl ObserverStage {
         let n = observer.dof();
         let conditioner = if settings.input_filter_hz > 0.0 {
             let c = InputConditioner::new(n, settings.input_filter_hz, settings.rate_hz)
-                .map_err(|e| LoopError::invalid("observer.input_filter_hz", e.to_string()))?;
+                .map_err(|e| e.at("observer.input_filter_hz"))?;
             Some(c)
         } else {
             None

@@ -507,3 +507,42 @@ fn a_components_key_and_hint_reach_the_loops_text() {
         e.text()
     );
 }
+
+/// Issue 32, item 5: a bad setting of a deployment folder is the one keyed shape, located
+/// in its `loop.toml` by the reader, as one line with its fix (what `adm_last_error`,
+/// Python and the command line show).
+#[test]
+fn a_bad_setting_of_a_deployment_is_located_in_its_loop_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("deploy");
+    let file = dir.join("loop.toml").display().to_string();
+    let deploy = |loop_toml: String| {
+        let files = vec![
+            ("loop.toml".to_string(), loop_toml.into_bytes()),
+            ("arm.urdf".to_string(), std::fs::read(URDF).unwrap()),
+        ];
+        write_deployment(&dir, &files, serde_json::Value::Null).unwrap();
+    };
+    deploy(LOOP_TOML.replace("\ncutoff_hz = 5.0", "\ncutof_hz = 5.0"));
+    let e = RobotLoop::load(&dir, &[]).err().expect("a misspelt key");
+    assert_eq!(e.key(), "observer.cutof_hz", "{e}");
+    let text = e.text();
+    assert!(
+        text.starts_with(&format!(
+            "{file}: key `observer.cutof_hz`: unknown field `cutof_hz`"
+        )) && text
+            .ends_with("; hint: remove the key or fix its spelling; the expected keys are listed"),
+        "{text}"
+    );
+    deploy(LOOP_TOML.to_string());
+    let e = RobotLoop::load(&dir, &["signals.filter_cutoff_hz = 600"])
+        .err()
+        .expect("a cut-off above half the rate");
+    assert_eq!(e.key(), "signals.filter_cutoff_hz", "{e}");
+    assert_eq!(
+        e.text(),
+        format!(
+            "{file}: key `signals.filter_cutoff_hz`: is 600, must be in [0, 500) Hz (half the control rate); hint: 0 disables the filter; 20 Hz is the default"
+        )
+    );
+}

@@ -23,27 +23,9 @@ use crate::network::PyNetwork;
 
 const JOINTS: &str = "one value per joint, in chain order";
 
+/// A loop error under `context`, with the text the C ABI and the command line show.
 fn loop_error(context: &str, e: LoopError) -> PyErr {
-    let key = e.key();
-    let mut message = format!("{context}: ");
-    match &e {
-        LoopError::Invalid {
-            message: m, hint, ..
-        } => {
-            message.push_str(&format!("key `{key}`: {m}"));
-            if let Some(h) = hint {
-                message.push_str(&format!("; hint: {h}"));
-            }
-        }
-        LoopError::Component { source, .. } => {
-            message.push_str(&format!("key `{key}`: {}", source.message));
-            if let Some(h) = &source.hint {
-                message.push_str(&format!("; hint: {h}"));
-            }
-        }
-        other => message.push_str(&other.to_string()),
-    }
-    value_error(message)
+    value_error(format!("{context}: {}", e.text()))
 }
 
 /// One control period of force-sensorless admittance control (the Rust `ClosedLoop`,
@@ -145,7 +127,7 @@ impl PyClosedLoop {
         let inner = ClosedLoop::from_config(model, &cfg, trained)
             .map_err(|e| loop_error("ClosedLoop config", e))?;
         let chain = SignalChain::new(n, sensor_cutoff_hz, cfg.control_rate_hz)
-            .map_err(|e| value_error(format!("ClosedLoop: sensor_cutoff_hz: {e}")))?;
+            .map_err(|e| loop_error("ClosedLoop", e.at("sensor_cutoff_hz")))?;
         Ok(PyClosedLoop {
             inner,
             chain,

@@ -10,7 +10,7 @@
 
 use std::fmt;
 
-use admittance_control::JointValues;
+use admittance_control::{ConfigError, JointValues};
 use numpy::prelude::*;
 use numpy::PyUntypedArray;
 use pyo3::exceptions::PyTypeError;
@@ -22,20 +22,20 @@ use serde::de::{
 
 use crate::convert::{shape_text, value_error};
 
-/// A deserialisation error with the dotted key of the value it concerns, when known.
+/// A deserialisation error: the project's one keyed shape of a bad setting
+/// ([`ConfigError`], issue 32) inside serde's error type, so that a Python dict's bad key
+/// reads as the same key would in a scenario file or a loop file.
 #[derive(Debug)]
 pub struct DeError {
-    /// What is wrong.
-    pub message: String,
-    /// Dotted key (`controller.pd.kp[3]`); `None`: the dict itself.
-    pub key: Option<String>,
+    /// The dotted key (`controller.pd.kp[3]`; empty: the dict itself) and what is wrong.
+    pub setting: ConfigError,
     /// A Python object of a type no configuration value has (a `TypeError`).
     pub type_error: bool,
 }
 
 impl fmt::Display for DeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.message)
+        fmt::Display::fmt(&self.setting, f)
     }
 }
 
@@ -44,8 +44,7 @@ impl std::error::Error for DeError {}
 impl de::Error for DeError {
     fn custom<T: fmt::Display>(msg: T) -> Self {
         DeError {
-            message: msg.to_string(),
-            key: None,
+            setting: ConfigError::new("", msg.to_string()),
             type_error: false,
         }
     }
@@ -54,19 +53,30 @@ impl de::Error for DeError {
 impl DeError {
     /// The error located at `key`, unless a deeper key is already known.
     fn at(mut self, key: &str) -> Self {
-        if self.key.is_none() && !key.is_empty() {
-            self.key = Some(key.to_string());
+        if self.setting.key.is_empty() {
+            self.setting.key = key.to_string();
         }
         self
     }
 
+    /// A value of no configuration type at `key`.
+    fn type_error(key: &str, message: impl Into<String>) -> Self {
+        DeError {
+            setting: ConfigError::new(key, message),
+            type_error: true,
+        }
+    }
+
     fn from_py(e: PyErr, key: &str) -> Self {
-        Python::attach(|py| DeError {
-            message: e.value(py).to_string(),
-            key: None,
-            type_error: false,
-        })
-        .at(key)
+        Python::attach(|py| <DeError as de::Error>::custom(e.value(py))).at(key)
+    }
+
+    /// The bad setting, with the fix for its kind (as a scenario file's would have).
+    pub fn into_setting(self) -> ConfigError {
+        match self.setting.hint {
+            Some(_) => self.setting,
+            None => ConfigError::unreadable(self.setting.key, self.setting.message),
+        }
     }
 }
 
@@ -184,14 +194,12 @@ impl<'de, 'a, 'py> de::Deserializer<'de> for PyDe<'a, 'py> {
         if let Ok(v) = o.extract::<f64>() {
             return visitor.visit_f64(v).map_err(|e: DeError| e.at(path));
         }
-        Err(DeError {
-            message: format!(
+        Err(DeError::type_error(
+            path,
+            format!(
                 "a `{type_name}` is not a configuration value (use numbers, strings, booleans, lists and dicts)"
             ),
-            key: None,
-            type_error: true,
-        }
-        .at(path))
+        ))
     }
 
     fn deserialize_option<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, DeError> {
@@ -252,11 +260,7 @@ impl<'de, 'py> MapAccess<'de> for DictAccess<'py> {
             return Ok(None);
         };
         let Ok(k) = k.cast::<PyString>() else {
-            return Err(DeError {
-                message: "keys must be strings".into(),
-                key: (!self.prefix.is_empty()).then(|| self.prefix.clone()),
-                type_error: true,
-            });
+            return Err(DeError::type_error(&self.prefix, "keys must be strings"));
         };
         let k: String = k.extract().map_err(|e| DeError::from_py(e, &self.prefix))?;
         self.key = join(&self.prefix, &k);
@@ -310,12 +314,9 @@ impl<'de, 'py> SeqAccess<'de> for ListAccess<'py> {
 /// (`TypeError` for a value of no configuration type) starting with `context`.
 pub fn from_py<T: DeserializeOwned>(obj: &Bound<'_, PyAny>, context: &str) -> PyResult<T> {
     T::deserialize(PyDe::new(obj, "")).map_err(|e| {
-        let mut message = context.to_string();
-        if let Some(key) = &e.key {
-            message.push_str(&format!(": key `{key}`"));
-        }
-        message.push_str(&format!(": {}", e.message));
-        if e.type_error {
+        let type_error = e.type_error;
+        let message = format!("{context}: {}", e.into_setting());
+        if type_error {
             PyTypeError::new_err(message)
         } else {
             value_error(message)

@@ -83,6 +83,10 @@ def test_config_errors_name_the_dotted_key(baxter):
         adm.ClosedLoop(baxter, bad)
     with pytest.raises(ValueError, match=r"key `observer\.cutoff_hz`"):
         adm.ClosedLoop(baxter, pd_config(n, {"kind": "momentum", "cutoff_hz": -1.0}))
+    # The text a scenario file or a robot's loop.toml gives for the same key (issue 32).
+    with pytest.raises(ValueError, match=r"key `observer\.cutof_hz`: unknown field `cutof_hz`, .*; "
+                       r"hint: remove the key or fix its spelling; the expected keys are listed$"):
+        adm.ClosedLoop(baxter, pd_config(n, {"kind": "momentum", "cutof_hz": 1.0}))
     with pytest.raises(ValueError, match=r"key `observer\.kind`: unknown variant `psychic`"):
         adm.ClosedLoop(baxter, pd_config(n, {"kind": "psychic"}))
     with pytest.raises(ValueError, match=r"key `observer\.warmup`: invalid type: string"):

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use admittance_control::BroadModel;
 use admittance_dynamics::Model;
-use admittance_loop::{ClosedLoop, Compliance, LoopError, ObserverKind};
+use admittance_loop::{ClosedLoop, Compliance, ObserverKind};
 use admittance_sim::{Plant, Sensors, SimError};
 
 use crate::context::Ctx;
@@ -92,7 +92,7 @@ pub(crate) fn assemble(
     if let Some(seed) = options.seed.or(scenario.seed) {
         plant_config.sensors.seed = seed;
     }
-    let sim_err = |e: SimError| ctx.err("plant", e.to_string(), None);
+    let sim_err = |e: SimError| ctx.plant_err(e);
     let plant = Plant::new(&model, &plant_config).map_err(sim_err)?;
     let mut gain_warnings = gain_warning_lines(&ctx, &scenario, &model, &trajectory);
     let sensors = Sensors::new(&model, &plant_config.sensors, plant_config.control_rate_hz)
@@ -100,7 +100,7 @@ pub(crate) fn assemble(
     let mut loop_config = scenario.loop_config_for(path);
     let oracle_admittance = loop_config
         .compliance(&model)
-        .map_err(|e| loop_err(&ctx, e))?;
+        .map_err(|e| ctx.loop_err(e))?;
     let identified = identified_nominal_of(&ctx, &scenario, &model, path, options, simulate)?;
     gain_warnings.extend(filter_warning(&ctx, &scenario, identified.as_ref()));
     if let Some(nominal) = &identified {
@@ -120,7 +120,7 @@ pub(crate) fn assemble(
         &mut observer_validation,
     )?;
     let mut closed_loop =
-        ClosedLoop::from_config(&model, &loop_config, trained).map_err(|e| loop_err(&ctx, e))?;
+        ClosedLoop::from_config(&model, &loop_config, trained).map_err(|e| ctx.loop_err(e))?;
     let contact = contact_run(
         &ctx,
         &scenario,
@@ -322,17 +322,6 @@ pub fn gain_warnings(
         &crate::spec::mid_range(&model),
     );
     Ok(gain_warning_lines(&ctx, &scenario, &model, &trajectory))
-}
-
-/// A loop error as a scenario error at the same key, located in the file.
-fn loop_err(ctx: &Ctx<'_>, e: LoopError) -> ScenarioError {
-    match &e {
-        LoopError::Component { section, source } => ctx.config_err(section, source),
-        _ => {
-            let problem = crate::spec::loop_problem(e);
-            ctx.err(&problem.key, problem.message, problem.hint.as_deref())
-        }
-    }
 }
 
 /// The network of a learned observer (docs/method.md section 5), trained or loaded from the

@@ -55,7 +55,7 @@ impl FreeMotionEstimates {
         }
         let rate = 1.0 / self.mean_dt();
         let mut filter = admittance_loop::EstimateLowPass::new(self.joints, cutoff_hz, rate)
-            .map_err(|e| ConfigError::new("observer.cutoff_hz", e.to_string()))?;
+            .map_err(admittance_loop::LoopError::into_setting)?;
         for row in self.estimate.chunks_exact_mut(self.joints) {
             let y = filter.update(row);
             row.copy_from_slice(y);
@@ -161,7 +161,7 @@ pub fn momentum_estimates_at(
         ));
     }
     let (x, tau) = observer_training_arrays(data, filter_hz)
-        .map_err(|e| ConfigError::new("input_filter_hz", e.to_string()))?;
+        .map_err(|e| e.at("input_filter_hz").into_setting())?;
     let mut obs = MomentumObserver::from_identification(identification, observer)?;
     let mut out = FreeMotionEstimates {
         joints: n,
@@ -174,7 +174,7 @@ pub fn momentum_estimates_at(
     // The identification's torque delay, applied as the run-time loop applies it.
     let rate = crate::identify_recording::sample_rate_hz(data);
     let mut delay = admittance_loop::InputDelay::new(&identification.summary.delay_s, rate)
-        .map_err(|e| ConfigError::new("identification", e.to_string()))?;
+        .map_err(|e| e.at("identification").into_setting())?;
     let mut delayed = vec![0.0; 4 * n];
     for k in 0..data.len() {
         let mut row = &x[k * 3 * n..(k + 1) * 3 * n];
@@ -234,12 +234,17 @@ pub fn calibrate_contact_on_all(
     };
     let mut parts = Vec::with_capacity(recordings.len());
     for (i, data) in recordings.iter().enumerate() {
-        let located = |e: ConfigError| {
-            if recordings.len() == 1 {
-                e
-            } else {
-                ConfigError::new(format!("data[{i}]"), e.to_string())
-            }
+        // Which recording is at fault, when there are several: its index is the key.
+        let located = |e: ConfigError| match recordings.len() {
+            1 => e,
+            _ => ConfigError {
+                key: format!("data[{i}]"),
+                message: match e.key.as_str() {
+                    "" | "data" => e.message,
+                    key => format!("`{key}` {}", e.message),
+                },
+                hint: e.hint,
+            },
         };
         if data.joints != first.joints {
             return Err(located(ConfigError::new(

@@ -1,6 +1,8 @@
 //! The context of reading one variant: its source, for errors located at their key.
 
 use admittance_control::ConfigError;
+use admittance_loop::LoopError;
+use admittance_sim::SimError;
 
 use crate::error::ScenarioError;
 use crate::source::ScenarioSource;
@@ -17,23 +19,33 @@ impl Ctx<'_> {
             .error_at(key, self.variant, message, hint.map(String::from))
     }
 
-    /// A controller or admittance configuration error, located at its key in the scenario
-    /// (`k2[1]` of `[controller.neural]` is written at `controller.neural.k2`).
-    pub fn config_err(&self, section: &str, e: &ConfigError) -> ScenarioError {
-        let key: String = e.key.split('[').next().unwrap_or("").to_string();
-        let path = if key.is_empty() {
-            section.to_string()
-        } else {
-            format!("{section}.{key}")
-        };
+    /// A bad setting (its key dotted from the scenario's root), located where the value
+    /// that variant sees is written.
+    pub fn setting_err(&self, e: &ConfigError) -> ScenarioError {
         let hint = e
             .hint
             .as_deref()
             .unwrap_or("change the value so that it meets the stated bound (the file or --set)");
-        let mut err = self.err(&path, e.message.clone(), Some(hint));
-        if e.key.contains('[') {
-            err.key = Some(format!("{section}.{}", e.key));
+        self.err(&e.key, e.message.clone(), Some(hint))
+    }
+
+    /// A component's bad setting, its key relative to the component's table `section`
+    /// (`k2[1]` of `[controller.neural]` is written at `controller.neural.k2`).
+    pub fn config_err(&self, section: &str, e: &ConfigError) -> ScenarioError {
+        self.setting_err(&e.clone().within(section))
+    }
+
+    /// A loop error at the same setting, in the scenario's vocabulary.
+    pub fn loop_err(&self, e: LoopError) -> ScenarioError {
+        self.setting_err(&crate::spec::loop_problem(e))
+    }
+
+    /// A simulator error: a bad setting at its key under `[plant]`, anything else at the
+    /// plant's table.
+    pub fn plant_err(&self, e: SimError) -> ScenarioError {
+        match e {
+            SimError::Setting(s) => self.config_err("plant", &s),
+            other => self.err("plant", other.to_string(), None),
         }
-        err
     }
 }

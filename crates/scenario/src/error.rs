@@ -77,33 +77,3 @@ impl fmt::Display for ScenarioError {
 }
 
 impl std::error::Error for ScenarioError {}
-
-/// A semantic problem found by validation of a typed configuration: the key path (dotted,
-/// relative to the scenario root; list elements by index, `plant.friction.1.joint`), the
-/// message and an optional hint.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Invalid {
-    /// Dotted key path.
-    pub key: String,
-    /// What is wrong.
-    pub message: String,
-    /// How to fix it.
-    pub hint: Option<String>,
-}
-
-impl Invalid {
-    /// A problem at `key`.
-    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
-        Self {
-            key: key.into(),
-            message: message.into(),
-            hint: None,
-        }
-    }
-
-    /// With a hint.
-    pub fn hint(mut self, hint: impl Into<String>) -> Self {
-        self.hint = Some(hint.into());
-        self
-    }
-}

@@ -66,7 +66,7 @@ pub use contact::{
     momentum_estimates, FalseAlarms, FreeMotionEstimates, CONTACT_WARM_UP_S,
 };
 pub use contact_score::ContactMetrics;
-pub use error::{Invalid, ScenarioError};
+pub use error::ScenarioError;
 pub use external::{ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use identify_recording::{

@@ -90,7 +90,7 @@ fn simulate_variant(
     } = parts;
     let n = joints.len();
     let dt = closed_loop.dt();
-    let sim_err = |e: SimError| ctx.err("plant", e.to_string(), None);
+    let sim_err = |e: SimError| ctx.plant_err(e);
     let steps = (scenario.duration / dt).round() as usize;
     let model = plant.model().clone();
     let effort = plant.effort_limits().to_vec();
@@ -125,7 +125,7 @@ fn simulate_variant(
         with_hand,
     );
     let mut gates = crate::gate_stage::GateStage::new(&model, &scenario.gates, dt)
-        .map_err(|e| ctx.err("plant", e.to_string(), None))?;
+        .map_err(|e| ctx.loop_err(e))?;
     let (mut q_d, mut qd_d, mut qdd_d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let zeros = vec![0.0; n];
     let variant_name = ctx.variant.unwrap_or("base");

@@ -54,7 +54,7 @@ pub(crate) fn known_joints(model: &Model) -> String {
     model.joint_names().collect::<Vec<_>>().join(", ")
 }
 
-/// Index of a joint by name, or a [`SimError::UnknownName`] naming the key.
+/// Index of a joint by name, or a setting error naming the key.
 pub(crate) fn joint_index(
     model: &Model,
     key: impl FnOnce() -> String,
@@ -62,12 +62,7 @@ pub(crate) fn joint_index(
 ) -> Result<usize, SimError> {
     model
         .joint_index(name)
-        .ok_or_else(|| SimError::UnknownName {
-            key: key(),
-            what: "joint",
-            name: name.to_string(),
-            known: known_joints(model),
-        })
+        .ok_or_else(|| SimError::unknown_name(key(), "joint", name, &known_joints(model)))
 }
 
 /// The joints an entry with `joint = NAME` or `"*"` applies to.
@@ -92,18 +87,9 @@ pub(crate) fn frame_index(
 ) -> Result<usize, SimError> {
     match name {
         None => Ok(model.tip_frame),
-        Some(name) => model
-            .frame_index(name)
-            .ok_or_else(|| SimError::UnknownName {
-                key: key(),
-                what: "frame",
-                name: name.to_string(),
-                known: model
-                    .frames
-                    .iter()
-                    .map(|f| f.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }),
+        Some(name) => model.frame_index(name).ok_or_else(|| {
+            let known: Vec<&str> = model.frames.iter().map(|f| f.name.as_str()).collect();
+            SimError::unknown_name(key(), "frame", name, &known.join(", "))
+        }),
     }
 }

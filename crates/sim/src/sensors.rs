@@ -253,7 +253,7 @@ impl Sensors {
             })
             .collect();
         let chain = SignalChain::new(n, config.filter_cutoff_hz, sample_rate_hz)
-            .map_err(|e| SimError::config("sensors.filter_cutoff_hz", e.to_string()))?;
+            .map_err(|e| e.at("sensors.filter_cutoff_hz"))?;
         Ok(Self {
             n,
             resolution: config.resolution(),
@@ -330,8 +330,7 @@ impl Sensors {
         }
         screen(time, &mut self.raw, &mut self.raw_tau);
         self.chain
-            .sample_at(time, &self.raw, &self.raw_time, &self.raw_tau)
-            .map_err(|e| SimError::config("sensors", e.to_string()))?;
+            .sample_at(time, &self.raw, &self.raw_time, &self.raw_tau)?;
         let m = self.chain.measurement_mut();
         m.injected_nan.copy_from_slice(&self.injected_nan);
         m.injected_stale.copy_from_slice(&self.injected_stale);

@@ -15,8 +15,10 @@ pub const CONTACT_FLOOR_FORMAT: &str = "admittance-contact-floor";
 /// drop away from rest, absent in 1).
 pub const CONTACT_FLOOR_FORMAT_VERSION: u64 = 2;
 
+/// A problem of the file as a whole: no key of its own (the caller that named the file
+/// puts its setting before it), the path at the head of the message.
 fn err(path: &Path, m: impl std::fmt::Display) -> ConfigError {
-    ConfigError::new(path.display().to_string(), m.to_string())
+    ConfigError::new("", format!("{}: {m}", path.display()))
 }
 
 /// FNV-1a 64 of the payload's canonical JSON text (keys sorted).

@@ -16,7 +16,9 @@ use std::ops::Range;
 
 use serde::de::DeserializeOwned;
 
-use crate::error::{Invalid, ScenarioError};
+use admittance_control::ConfigError;
+
+use crate::error::ScenarioError;
 use tree::{Node, Table, Value};
 
 /// A command-line override `KEY=VALUE`, positioned after the file's text.
@@ -330,17 +332,18 @@ impl ScenarioSource {
         message: impl Into<String>,
         hint: Option<String>,
     ) -> ScenarioError {
-        let span = self
-            .merged(variant)
-            .ok()
-            .and_then(|t| tree::nearest(&t, key).map(|(_, n)| n.key_span.clone()));
+        let span = self.merged(variant).ok().and_then(|t| {
+            // A list element is `name[i]` in a key, `name.i` in the tree.
+            let path = key.replace('[', ".").replace(']', "");
+            tree::nearest(&t, &path).map(|(_, n)| n.key_span.clone())
+        });
         self.located(key, span, variant, message.into(), hint)
     }
 
     /// Maps validation problems to located errors: the first one, with every other one in
     /// [`ScenarioError::more`].
-    pub fn invalid(&self, variant: Option<&str>, problems: &[Invalid]) -> ScenarioError {
-        let one = |p: &Invalid| {
+    pub fn invalid(&self, variant: Option<&str>, problems: &[ConfigError]) -> ScenarioError {
+        let one = |p: &ConfigError| {
             let hint = p.hint.clone().unwrap_or_else(|| {
                 format!(
                     "fix `{}` in the file, or override it with --set {}=VALUE",
@@ -362,21 +365,12 @@ impl ScenarioSource {
     pub fn resolve<T: DeserializeOwned>(&self, variant: Option<&str>) -> Result<T, ScenarioError> {
         let merged = self.merged(variant)?;
         de::from_table::<T>(&merged, 0..0).map_err(|e| {
-            let message = e.message.trim().replace('\n', " ");
-            let hint = if message.contains("unknown field") {
-                Some("remove the key or fix its spelling; the expected keys are listed".into())
-            } else if message.contains("invalid type") {
-                Some("check the value's type (number, string, list, table)".into())
-            } else if message.contains("missing field") {
-                Some("add the key to the table".into())
-            } else {
-                None
-            };
             let (path, span) = match e.at {
                 Some((p, s)) => (p, Some(s)),
                 None => (String::new(), None),
             };
-            self.located(&path, span, variant, message, hint)
+            let setting = ConfigError::unreadable(&path, &e.message);
+            self.located(&path, span, variant, setting.message, setting.hint)
         })
     }
 }

@@ -72,7 +72,7 @@ fn entries_of_arrays_of_tables_have_lines() {
     assert_eq!(e.line, Some(11), "{e}");
     let e = src.invalid(
         None,
-        &[Invalid::new("controller.list.1.joint", "unknown joint")],
+        &[ConfigError::new("controller.list.1.joint", "unknown joint")],
     );
     assert_eq!(e.line, Some(10), "{e}");
 }
@@ -107,7 +107,7 @@ fn validation_problems_are_located_and_all_listed() {
     let src = ScenarioSource::parse(TEXT, "s.toml").unwrap();
     let e = src.invalid(
         Some("slow"),
-        &[Invalid::new("controller.k1", "must be positive").hint("use 12")],
+        &[ConfigError::new("controller.k1", "must be positive").hint("use 12")],
     );
     assert_eq!(e.line, Some(7));
     assert_eq!(
@@ -117,8 +117,8 @@ fn validation_problems_are_located_and_all_listed() {
     let e = src.invalid(
         None,
         &[
-            Invalid::new("controller.k1", "bad"),
-            Invalid::new("name", "too short"),
+            ConfigError::new("controller.k1", "bad"),
+            ConfigError::new("name", "too short"),
         ],
     );
     assert_eq!(e.line, Some(4));

@@ -3,11 +3,10 @@
 //! scenario written for another arm (Baxter's pose on a Panda) is refused with a hint
 //! instead of being run into the limits.
 
-use admittance_control::JointValues;
+use admittance_control::{ConfigError, JointValues};
 use admittance_dynamics::Model;
 
 use super::Scenario;
-use crate::error::Invalid;
 
 /// Slack on the limits (rad): values written with a few decimals that round onto a limit.
 const SLACK: f64 = 1e-6;
@@ -41,7 +40,7 @@ fn fmt_pose(v: &[f64]) -> String {
 
 impl Scenario {
     /// Checks the scenario against `model`'s joint limits (after [`Scenario::validate`]).
-    pub fn validate_for_arm(&self, model: &Model) -> Vec<Invalid> {
+    pub fn validate_for_arm(&self, model: &Model) -> Vec<ConfigError> {
         let mut out = Vec::new();
         let n = model.nq();
         let names: Vec<&str> = model.joint_names().collect();
@@ -101,7 +100,7 @@ impl Scenario {
                     _ => pose_key.to_string(),
                 };
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         key,
                         format!(
                             "q_d of {} spans [{:.3}, {:.3}] rad, outside its limits [{lo:.3}, {hi:.3}] rad",
@@ -113,7 +112,7 @@ impl Scenario {
             }
             if v.is_finite() && v > 0.0 && speed[j] > v * (1.0 + 1e-9) {
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         sine_key[j].clone().unwrap_or_else(|| pose_key.to_string()),
                         format!(
                             "q_d of {} moves at up to {:.3} rad/s, beyond its velocity limit {v} rad/s",
@@ -128,7 +127,7 @@ impl Scenario {
             for (j, (lo, hi)) in model.position_limits().enumerate() {
                 if !(q0[j] >= lo - SLACK && q0[j] <= hi + SLACK) {
                     out.push(
-                        Invalid::new(
+                        ConfigError::new(
                             "plant.initial_q",
                             format!(
                                 "{} starts at {:.3} rad, outside its limits [{lo:.3}, {hi:.3}] rad",
@@ -150,7 +149,7 @@ impl Scenario {
                 for (j, (lo, hi)) in model.position_limits().enumerate() {
                     if h[j].is_finite() && (c[j] - h[j] < lo - SLACK || c[j] + h[j] > hi + SLACK) {
                         out.push(
-                            Invalid::new(
+                            ConfigError::new(
                                 "admittance.saturation.half_range",
                                 format!(
                                     "keeps q_r of {} inside ({:.3}, {:.3}) rad, which leaves its limits [{lo:.3}, {hi:.3}] rad",
@@ -179,7 +178,7 @@ impl Scenario {
         model: &Model,
         poses: &[Vec<f64>],
         damping: &[f64],
-    ) -> Vec<Invalid> {
+    ) -> Vec<ConfigError> {
         use admittance_control::gains;
         use admittance_loop::{ControllerKind, ObserverKind};
         let n = model.nq();
@@ -225,7 +224,7 @@ impl Scenario {
         advice
             .into_iter()
             .map(|a| {
-                Invalid::new(a.key.clone(), a.message.clone()).hint(format!(
+                ConfigError::new(a.key.clone(), a.message.clone()).hint(format!(
                     "set {}[{}] ({}) to {} (`admittance gains --urdf FILE` prints a starting set for the arm)",
                     a.key, a.index, a.joint, a.suggested
                 ))

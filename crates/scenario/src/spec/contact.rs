@@ -10,12 +10,11 @@
 
 use std::path::PathBuf;
 
-use admittance_control::ContactCalibrationConfig;
+use admittance_control::{ConfigError, ContactCalibrationConfig};
 use admittance_loop::ObserverKind;
 use serde::{Deserialize, Serialize};
 
 use super::Scenario;
-use crate::error::Invalid;
 
 /// Where the run's contact floor comes from, and what it does.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,30 +55,26 @@ impl ContactSpec {
 
 impl Scenario {
     /// The checks of `[contact]`.
-    pub(super) fn validate_contact(&self, out: &mut Vec<Invalid>) {
+    pub(super) fn validate_contact(&self, out: &mut Vec<ConfigError>) {
         let Some(c) = &self.contact else { return };
         match (&c.calibration, &c.floor) {
             (None, None) => out.push(
-                Invalid::new("contact", "names neither `calibration` nor `floor`").hint(
+                ConfigError::new("contact", "names neither `calibration` nor `floor`").hint(
                     "calibration = \"FREE_MOTION.toml\" (free motion the identification did not fit), or floor = \"FILE\"",
                 ),
             ),
             (Some(_), Some(_)) => out.push(
-                Invalid::new("contact.floor", "goes with `calibration`: give one of them")
+                ConfigError::new("contact.floor", "goes with `calibration`: give one of them")
                     .hint("`floor` reads a floor made elsewhere; `calibration` makes one"),
             ),
             _ => {}
         }
         if let Err(e) = c.calibration_config().validate() {
-            let invalid = Invalid::new(format!("contact.{}", e.key), e.message);
-            out.push(match e.hint {
-                Some(h) => invalid.hint(h),
-                None => invalid,
-            });
+            out.push(e.within("contact"));
         }
         if c.calibration.is_some() && self.observer.kind != ObserverKind::Momentum {
             out.push(
-                Invalid::new(
+                ConfigError::new(
                     "contact.calibration",
                     "calibrates the momentum observer's floor, and observer.kind is another",
                 )
@@ -87,7 +82,7 @@ impl Scenario {
             );
         }
         if c.deadband && self.admittance.is_none() && self.task_admittance.is_none() {
-            out.push(Invalid::new(
+            out.push(ConfigError::new(
                 "contact.deadband",
                 "needs an [admittance] or [task_admittance] table",
             ));

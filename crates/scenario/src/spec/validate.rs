@@ -1,15 +1,15 @@
 //! Checks of a resolved scenario that serde cannot make: signs, ranges, names, and the
 //! combinations of sections.
 
+use admittance_control::ConfigError;
 use admittance_loop::{ControllerKind, LoopError};
 
 use super::Scenario;
-use crate::error::Invalid;
 
 impl Scenario {
     /// Checks what serde cannot: signs, ranges, names. `joints` are the model's joint names.
     /// Every problem is returned, each at its key.
-    pub fn validate(&self, joints: &[String]) -> Vec<Invalid> {
+    pub fn validate(&self, joints: &[String]) -> Vec<ConfigError> {
         let mut out = Vec::new();
         self.validate_times(&mut out);
         self.validate_trajectory(joints, &mut out);
@@ -20,26 +20,26 @@ impl Scenario {
         out.extend(self.gates.problems("gates").into_iter().map(loop_problem));
         for (key, problem) in self.health.problems() {
             out.push(
-                Invalid::new(format!("health.{key}"), problem)
+                ConfigError::new(format!("health.{key}"), problem)
                     .hint("a threshold of the run's health rules (docs/outputs.md, \"Health\")"),
             );
         }
         if self.output.decimation == 0 {
-            out.push(Invalid::new("output.decimation", "must be at least 1"));
+            out.push(ConfigError::new("output.decimation", "must be at least 1"));
         }
         out
     }
 
-    fn validate_times(&self, out: &mut Vec<Invalid>) {
+    fn validate_times(&self, out: &mut Vec<ConfigError>) {
         if !(self.duration.is_finite() && self.duration > 0.0) {
-            out.push(Invalid::new(
+            out.push(ConfigError::new(
                 "duration",
                 format!("is {}, must be > 0 s", self.duration),
             ));
         }
         if !(self.evaluation_start >= 0.0 && self.evaluation_start < self.duration) {
             out.push(
-                Invalid::new(
+                ConfigError::new(
                     "evaluation_start",
                     format!("is {}, must be in [0, duration)", self.evaluation_start),
                 )
@@ -48,13 +48,13 @@ impl Scenario {
         }
     }
 
-    fn validate_trajectory(&self, joints: &[String], out: &mut Vec<Invalid>) {
+    fn validate_trajectory(&self, joints: &[String], out: &mut Vec<ConfigError>) {
         let t = &self.trajectory;
         if t.excitation.is_some()
             && (t.offset.is_some() || !t.waypoints.is_empty() || !t.sines.is_empty())
         {
             out.push(
-                Invalid::new(
+                ConfigError::new(
                     "trajectory.excitation",
                     "is the whole trajectory: it does not go with offset, waypoints or sines",
                 )
@@ -62,13 +62,13 @@ impl Scenario {
             );
         }
         if let Some(Err(e)) = t.excitation.as_ref().map(|e| e.validate()) {
-            out.push(Invalid::new("trajectory.excitation", e.to_string()));
+            out.push(ConfigError::new("trajectory.excitation", e.to_string()));
         }
         let n = joints.len();
         if let Some(offset) = &self.trajectory.offset {
             if offset.len() != n {
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         "trajectory.offset",
                         format!("has {} values, the arm has {n} joints", offset.len()),
                     )
@@ -76,10 +76,10 @@ impl Scenario {
                 );
             }
             if offset.iter().any(|v| !v.is_finite()) {
-                out.push(Invalid::new("trajectory.offset", "must be finite"));
+                out.push(ConfigError::new("trajectory.offset", "must be finite"));
             }
             if !self.trajectory.waypoints.is_empty() {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     "trajectory.waypoints",
                     "give either `offset` or `waypoints`, not both",
                 ));
@@ -90,15 +90,15 @@ impl Scenario {
             let key = format!("trajectory.waypoints.{k}");
             if w.len() != n + 1 {
                 out.push(
-                    Invalid::new(&key, format!("has {} values; a waypoint is [t, then one angle per joint] ({} values)", w.len(), n + 1))
+                    ConfigError::new(&key, format!("has {} values; a waypoint is [t, then one angle per joint] ({} values)", w.len(), n + 1))
                         .hint(format!("joints: {}", joints.join(", "))),
                 );
                 continue;
             }
             if w.iter().any(|v| !v.is_finite()) {
-                out.push(Invalid::new(&key, "must be finite"));
+                out.push(ConfigError::new(&key, "must be finite"));
             } else if w[0] <= previous {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     &key,
                     format!(
                         "its time {} s is not after the previous waypoint's ({previous} s)",
@@ -112,7 +112,7 @@ impl Scenario {
             let key = format!("trajectory.sines.{k}");
             if !joints.contains(&s.joint) {
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         format!("{key}.joint"),
                         format!("unknown joint '{}'", s.joint),
                     )
@@ -120,13 +120,13 @@ impl Scenario {
                 );
             }
             if !(s.period.is_finite() && s.period > 0.0) {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     format!("{key}.period"),
                     format!("is {}, must be > 0 s", s.period),
                 ));
             }
             if !s.amplitude.is_finite() || !s.phase.is_finite() {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     key.clone(),
                     "amplitude and phase must be finite",
                 ));
@@ -134,10 +134,10 @@ impl Scenario {
         }
     }
 
-    fn validate_dynamic_nodes(&self, out: &mut Vec<Invalid>) {
+    fn validate_dynamic_nodes(&self, out: &mut Vec<ConfigError>) {
         if let Some(d) = &self.dynamic_nodes {
             if self.controller.kind != ControllerKind::Neural {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     "dynamic_nodes",
                     "needs controller.kind = \"neural\"",
                 ));
@@ -147,7 +147,7 @@ impl Scenario {
                 && d.grow_time < self.duration)
             {
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         "dynamic_nodes.grow_time",
                         "needs 0 < discard_time < grow_time < duration",
                     )
@@ -155,13 +155,13 @@ impl Scenario {
                 );
             }
             if !(d.upsilon > 0.0 && d.upsilon < 1.0) {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     "dynamic_nodes.upsilon",
                     format!("is {}, must be in (0, 1)", d.upsilon),
                 ));
             }
             if !(d.approximation_window > 0.0 && d.approximation_window <= d.discard_time) {
-                out.push(Invalid::new(
+                out.push(ConfigError::new(
                     "dynamic_nodes.approximation_window",
                     "must be > 0 and at most discard_time",
                 ));
@@ -172,7 +172,7 @@ impl Scenario {
                 || d.approximation_window > self.duration - d.grow_time
             {
                 out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         "dynamic_nodes.approximation_window",
                         format!(
                             "is {} s, longer than a phase (grow_time - discard_time = {} s, duration - grow_time = {} s)",
@@ -188,12 +188,12 @@ impl Scenario {
     }
 
     /// The scenario's own part of `[observer]`: the training of the learned observers.
-    fn validate_training(&self, out: &mut Vec<Invalid>) {
+    fn validate_training(&self, out: &mut Vec<ConfigError>) {
         self.validate_identify(out);
         if self.observer.kind.is_learned() {
             match &self.observer.training {
                 None => out.push(
-                    Invalid::new(
+                    ConfigError::new(
                         "observer.kind",
                         "needs an [observer.training] table (the free-motion data to learn from)",
                     )
@@ -201,16 +201,16 @@ impl Scenario {
                 ),
                 Some(t) => {
                     if t.nodes == 0 {
-                        out.push(Invalid::new("observer.training.nodes", "must be at least 1"));
+                        out.push(ConfigError::new("observer.training.nodes", "must be at least 1"));
                     }
                     if !(t.width_scale.is_finite() && t.width_scale > 0.0) {
-                        out.push(Invalid::new(
+                        out.push(ConfigError::new(
                             "observer.training.width_scale",
                             format!("is {}, must be finite and > 0", t.width_scale),
                         ));
                     }
                     if t.width_neighbours == 0 {
-                        out.push(Invalid::new(
+                        out.push(ConfigError::new(
                             "observer.training.width_neighbours",
                             "must be at least 1",
                         ));
@@ -219,7 +219,7 @@ impl Scenario {
                         && (t.friction_scales.is_empty()
                             || t.friction_scales.iter().any(|v| !(v.is_finite() && *v > 0.0)))
                     {
-                        out.push(Invalid::new(
+                        out.push(ConfigError::new(
                             "observer.training.friction_scales",
                             format!(
                                 "is {:?}, must be a non-empty list of finite values > 0 (rad/s)",
@@ -236,14 +236,14 @@ impl Scenario {
 impl Scenario {
     /// `[observer.training] identify = true`: the identified model replaces the URDF, so
     /// neither a given identification file nor a scaled URDF goes with it.
-    fn validate_identify(&self, out: &mut Vec<Invalid>) {
+    fn validate_identify(&self, out: &mut Vec<ConfigError>) {
         let o = &self.observer;
         if !o.training.as_ref().is_some_and(|t| t.identify) {
             return;
         }
         if o.identification.is_some() {
             out.push(
-                Invalid::new(
+                ConfigError::new(
                     "observer.training.identify",
                     "and observer.identification both give the nominal model",
                 )
@@ -252,7 +252,7 @@ impl Scenario {
         }
         if o.nominal_inertia_scale != 1.0 {
             out.push(
-                Invalid::new(
+                ConfigError::new(
                     "observer.nominal_inertia_scale",
                     format!(
                         "is {}; with observer.training.identify = true the nominal model is the identified one",
@@ -266,20 +266,13 @@ impl Scenario {
 }
 
 /// A problem of the loop's settings as a scenario problem at the same key (the control
-/// rate is the plant's in a scenario file).
-pub(crate) fn loop_problem(e: LoopError) -> Invalid {
-    let key = match e.key().as_str() {
-        "control_rate_hz" => "plant.control_rate_hz".to_string(),
-        key => key.to_string(),
-    };
-    let (message, hint) = match &e {
-        LoopError::Invalid { message, hint, .. } => (message.clone(), hint.map(String::from)),
-        LoopError::Component { source, .. } => (source.message.clone(), source.hint.clone()),
-        other => (other.to_string(), None),
-    };
-    let invalid = Invalid::new(key, message);
-    match hint {
-        Some(hint) => invalid.hint(hint),
-        None => invalid,
+/// rate is the plant's in a scenario file, the gates a table of their own).
+pub(crate) fn loop_problem(e: LoopError) -> ConfigError {
+    let mut setting = e.into_setting();
+    if setting.key == "control_rate_hz" {
+        setting.key = "plant.control_rate_hz".into();
+    } else if let Some(rest) = setting.key.strip_prefix("signals.gates") {
+        setting.key = format!("gates{rest}");
     }
+    setting
 }

@@ -249,3 +249,14 @@ fn dynamic_nodes_window_longer_than_a_phase_is_rejected() {
     let text = err.to_string();
     assert!(text.contains("approximation_window"), "{text}");
 }
+
+/// Issue 32, item 5: a setting the simulator refuses keeps its key up to the scenario
+/// file (it was reported at the whole `[plant]` table), located where it is written.
+#[test]
+fn a_plant_setting_the_simulator_refuses_is_located_at_its_key() {
+    let (source, path) = load("deadzone.toml", &["plant.inertia_scale=0.0"]);
+    let err = run_variant(&source, &path, None, &RunOptions::default())
+        .expect_err("an inertia scale of 0 is refused");
+    assert_eq!(err.key.as_deref(), Some("plant.inertia_scale"), "{err}");
+    assert_eq!(err.file, "--set plant.inertia_scale=0.0", "{err}");
+}

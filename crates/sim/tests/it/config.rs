@@ -295,7 +295,10 @@ fn invalid_values_name_their_key() {
     ];
     for (err, key) in cases {
         assert_eq!(err.key(), Some(key), "{err}");
-        assert!(err.to_string().starts_with(key), "{err}");
+        assert!(
+            err.to_string().starts_with(&format!("key `{key}`: ")),
+            "{err}"
+        );
     }
 }
 
