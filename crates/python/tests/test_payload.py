@@ -30,6 +30,10 @@ def test_a_payload_the_identification_never_saw_in_mujoco():
     # payload brings it near the floor without payload.
     assert r["false_torque_without_payload_model"] > 5.0 * r["false_torque_with_payload_model"], r
     assert r["ratio_to_floor"] <= 1.5, r
+    # The same for the default estimator (the momentum observer on the identification).
+    e = r["estimate_false_torque"]
+    assert e["without_payload_model"] > 5.0 * e["with_payload_model"], e
+    assert e["ratio_to_floor"] <= 1.5, e
 
 
 def test_with_payload_saves_a_file_every_consumer_loads(tmp_path, baxter):

@@ -108,7 +108,11 @@ pub fn identify(
     // arm's); the gain that weights noisy accelerations in predictions is chosen after.
     let signals = choose_delay(&held, &active, &prior, shifts.len(), n);
     let choose_ridge = |active: &[bool], signals: &Signals| {
-        ridge_for(settings.ridge, &held, fitter, active, &prior, signals)
+        let ridge = RidgeChoice {
+            given: settings.ridge,
+            tolerance: settings.ridge_tolerance,
+        };
+        ridge_for(ridge, &held, fitter, active, &prior, signals)
     };
     let (ridge, best) = choose_ridge(&active, &signals);
     let mut choice = Choice {
@@ -314,31 +318,66 @@ fn choose_delay(
     }
 }
 
-/// The ridge (`given`, else the best of a decade grid refined half a decade either side)
-/// with its held-out score.
-fn ridge_for(
+/// How the ridge is set: `given`, else chosen on held-out motion, the strongest within
+/// `tolerance` of the best held-out error.
+#[derive(Clone, Copy)]
+struct RidgeChoice {
     given: Option<f64>,
+    tolerance: f64,
+}
+
+/// The ridge with its held-out score: the given one, else from a decade grid refined half a
+/// decade either side, the best or (with a tolerance) the strongest within it of the best.
+fn ridge_for(
+    choice: RidgeChoice,
     held: &Held<'_>,
     fitter: Fitter,
     active: &[bool],
     prior: &DVector<f64>,
     signals: &Signals,
 ) -> (f64, f64) {
-    match given {
-        Some(r) => (r, held.score(fitter, active, prior, r, signals)),
-        None => {
-            let score = |r: f64| (r, held.score(fitter, active, prior, r, signals));
-            let coarse = best_of(ridge_grid().map(score), f64::NAN);
-            if coarse.0.is_nan() {
-                return coarse;
-            }
-            let half = 10f64.sqrt();
-            best_of(
-                [coarse, score(coarse.0 / half), score(coarse.0 * half)].into_iter(),
-                f64::NAN,
-            )
-        }
+    let score = |r: f64| (r, held.score(fitter, active, prior, r, signals));
+    if let Some(r) = choice.given {
+        return score(r);
     }
+    let half = 10f64.sqrt();
+    if choice.tolerance == 0.0 {
+        let coarse = best_of(ridge_grid().map(score), f64::NAN);
+        if coarse.0.is_nan() {
+            return coarse;
+        }
+        return best_of(
+            [coarse, score(coarse.0 / half), score(coarse.0 * half)].into_iter(),
+            f64::NAN,
+        );
+    }
+    let mut scored: Vec<(f64, f64)> = ridge_grid().map(score).collect();
+    let coarse = strongest_within(&scored, choice.tolerance);
+    if coarse.0.is_nan() {
+        return coarse;
+    }
+    scored.extend([score(coarse.0 / half), score(coarse.0 * half)]);
+    strongest_within(&scored, choice.tolerance)
+}
+
+/// The largest ridge whose score is within `tolerance` of the best score (NaN when none is
+/// finite).
+fn strongest_within(scored: &[(f64, f64)], tolerance: f64) -> (f64, f64) {
+    let best = scored.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+    if !best.is_finite() {
+        return (f64::NAN, f64::INFINITY);
+    }
+    scored
+        .iter()
+        .copied()
+        .filter(|s| s.1 <= best * (1.0 + tolerance))
+        .fold((f64::NAN, f64::INFINITY), |a, s| {
+            if a.0.is_nan() || s.0 > a.0 {
+                s
+            } else {
+                a
+            }
+        })
 }
 
 /// Refuses samples that do not move the arm (a joint whose angle and velocity hardly

@@ -187,6 +187,56 @@ fn noisy_torques_are_not_fitted_to_the_noise() {
 }
 
 #[test]
+fn a_ridge_tolerance_takes_the_strongest_ridge_near_the_best() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.9, 30.0);
+    let mut tau = torques(&urdf, &truth_terms(7), &q, &qd, &qdd);
+    for (k, t) in tau.iter_mut().enumerate() {
+        *t += ((k as f64 * 78.233).sin() * 43758.5453).rem_euclid(1.0) - 0.5;
+    }
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: 7,
+    };
+    let fit = |tolerance: f64| {
+        let settings = IdentificationSettings {
+            ridge_tolerance: tolerance,
+            springs: false,
+            ..Default::default()
+        };
+        identify(&urdf, &train, None, &settings).unwrap()
+    };
+    let total = |i: &Identification| -> f64 {
+        i.summary
+            .expected_false_torque_rms
+            .iter()
+            .map(|e| e * e)
+            .sum()
+    };
+    let (best, near) = (fit(0.0), fit(0.05));
+    assert!(
+        near.summary.ridge > best.summary.ridge,
+        "{} {}",
+        near.summary.ridge,
+        best.summary.ridge
+    );
+    // The held-out error it accepts: within the tolerance of the best (squared errors, as
+    // the choice compares them), and more than the best's (else it would be the best).
+    let (b, n) = (total(&best), total(&near));
+    assert!(n <= 1.05 * b * 1.000001 && n >= b * 0.999999, "{n} {b}");
+    assert!(near.joint_terms.iter().all(|t| t.is_physical()));
+    let bad = IdentificationSettings {
+        ridge_tolerance: 0.7,
+        ..Default::default()
+    };
+    let e = identify(&urdf, &train, None, &bad).unwrap_err().to_string();
+    assert!(e.contains("ridge_tolerance"), "{e}");
+}
+
+#[test]
 fn bad_samples_and_settings_are_named() {
     let urdf = common::baxter();
     let (q, qd, qdd) = motion(&urdf, 0.3, 2.0);
