@@ -5,12 +5,12 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
+use crate::container::RawMessage;
 use crate::error::BagError;
 use crate::flat::FlatSchema;
 use crate::msgs::{self, Float64MultiArray, JointState, WrenchStamped};
 use crate::profile::{Profile, SignalSource, FLOAT64_MULTI_ARRAY, JOINT_STATE, WRENCH_STAMPED};
 use crate::report::{Skip, TimeBase, TopicCount};
-use crate::source::RawMessage;
 
 mod assemble;
 
@@ -156,12 +156,12 @@ impl<'p> Collector<'p> {
             }
             Err((reason, detail)) => self.skip(m.topic, reason, m.log_time, detail),
         }
-        if self.values > crate::import::MAX_TABLE_VALUES {
+        if self.values > crate::budget::MAX_TABLE_VALUES {
             return Err(BagError::Data {
                 bag: self.bag.clone(),
                 message: format!(
                     "the profile's topics hold more than {} values by message {} (log time {:.3} s): above the import's memory budget; import a shorter recording (record with `ros2 bag record --max-bag-duration SECONDS` and import each .mcap file on its own)",
-                    crate::import::MAX_TABLE_VALUES,
+                    crate::budget::MAX_TABLE_VALUES,
                     self.messages,
                     m.log_time as f64 * 1e-9
                 ),

@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use crate::budget::MAX_TABLE_VALUES;
 use crate::error::BagError;
 use crate::extract::{Collector, Extracted, Series};
 use crate::output;
@@ -25,12 +26,6 @@ pub struct ImportOptions {
 /// The lowest rate the loop can use (Hz): its observers differentiate the measured angles
 /// at the control rate (docs/method.md); 10-50 Hz learning data sets are too coarse.
 pub const MIN_RATE_HZ: f64 = 200.0;
-
-/// The memory budget: the values decoded from the bag (checked while it is streamed) and
-/// the table's rows x columns (t, the four joint blocks, the label columns and the stamp,
-/// checked before the resampling allocates anything) at most this many each (50 million
-/// f64 = 400 MB).
-pub const MAX_TABLE_VALUES: u128 = 50_000_000;
 
 /// The table and what was done to get it.
 #[derive(Clone, Debug, PartialEq)]

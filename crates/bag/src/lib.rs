@@ -72,6 +72,7 @@
 // topic, field and types as text) does not matter.
 #![allow(clippy::result_large_err)]
 
+mod budget;
 mod container;
 mod error;
 mod extract;
@@ -84,8 +85,9 @@ mod report;
 mod resample;
 mod source;
 
+pub use budget::MAX_TABLE_VALUES;
 pub use error::{fmt_ns, BagError, CONVERT_COMMAND};
-pub use import::{import, import_to_csv, ImportOptions, Imported, MAX_TABLE_VALUES, MIN_RATE_HZ};
+pub use import::{import, import_to_csv, ImportOptions, Imported, MIN_RATE_HZ};
 pub use output::{check_columns, check_destination, csv_text, write_csv, STAMP_COLUMN};
 pub use profile::{Profile, SignalSource, FLOAT64_MULTI_ARRAY, JOINT_STATE, WRENCH_STAMPED};
 pub use report::{ImportReport, SignalReport, Skip, TimeBase, TopicCount};

@@ -178,7 +178,7 @@ pub fn grid(bag: &Path, series: &[Series], period: i64) -> Result<Vec<i64>, BagE
     let Some((first, rows)) = grid_span(bag, series, period)? else {
         return Ok(Vec::new());
     };
-    if rows > crate::import::MAX_TABLE_VALUES as i128 {
+    if rows > crate::budget::MAX_TABLE_VALUES as i128 {
         return Err(BagError::Data {
             bag: bag.to_path_buf(),
             message: format!("{rows} rows at this rate: choose a lower --rate"),

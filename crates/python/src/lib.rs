@@ -25,6 +25,7 @@ mod cosim;
 mod cosim_free_motion;
 mod free_motion;
 mod identification;
+mod identify_payload;
 mod model;
 mod network;
 mod observers;
@@ -59,7 +60,7 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(identification::identify, m)?,
         wrap_pyfunction!(identification::load_identification, m)?,
         wrap_pyfunction!(identification::excitation, m)?,
-        wrap_pyfunction!(payload::identify_payload, m)?,
+        wrap_pyfunction!(identify_payload::identify_payload, m)?,
         wrap_pyfunction!(bag::import_bag, m)?,
         wrap_pyfunction!(closed_loop::write_run_folder, m)?,
         wrap_pyfunction!(closed_loop::check_out_dir, m)?,

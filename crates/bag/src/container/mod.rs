@@ -10,6 +10,7 @@
 //! recorder) keeps the messages decodable before the end.
 
 mod chunk;
+mod message;
 mod records;
 mod registry;
 
@@ -19,8 +20,8 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::error::{BagError, CONVERT_COMMAND};
-use crate::source::{RawMessage, StreamOutcome};
 use chunk::ChunkError;
+pub use message::{RawMessage, StreamOutcome};
 use records::{Record, CHUNK, DATA_END, FOOTER};
 
 /// The largest record (and a chunk's uncompressed records) the reader accepts: 256 MiB.

@@ -4,10 +4,10 @@
 
 use std::collections::HashMap;
 
+use super::message::RawMessage;
 use super::records::Record;
 use super::{Channel, Fault, Reader, Schema};
 use crate::error::BagError;
-use crate::source::RawMessage;
 
 impl Reader<'_> {
     /// A record is consistent with the schemas and channels known (and those defined

@@ -310,6 +310,28 @@ impl FeatureMap {
     }
 }
 
+/// Appends to `out` the largest Gaussian activation of each pattern column of `at`
+/// (column-major, `fm.width()` rows), as `coverage.rs` measures one
+/// pattern, kept in eight running maxima so that the loop vectorises (a single `fold` is one
+/// serial chain of compares); the maximum of the activations (never NaN) does not depend on the order.
+pub(crate) fn push_max_activations(fm: &FeatureMap, at: &[f64], out: &mut Vec<f64>) {
+    const W: usize = 8;
+    let p = fm.width();
+    let g0 = fm.gauss_offset();
+    out.extend(at.chunks_exact(p.max(1)).map(|column| {
+        let gauss = &column[g0..];
+        let mut acc = [0.0f64; W];
+        let mut blocks = gauss.chunks_exact(W);
+        for b in &mut blocks {
+            for l in 0..W {
+                acc[l] = if b[l] > acc[l] { b[l] } else { acc[l] };
+            }
+        }
+        let tail = blocks.remainder().iter().fold(0.0f64, |m, &v| m.max(v));
+        acc.iter().fold(tail, |m, &v| m.max(v))
+    }));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,9 +12,8 @@
 //! matmul.
 
 use super::config::GramStrategy;
-use super::coverage::push_max_activations;
 use super::data::Dataset;
-use super::features::{BlockScratch, FeatureMap, SlabScratch};
+use super::features::{push_max_activations, BlockScratch, FeatureMap, SlabScratch};
 use super::kernels::syrk::{self, Store};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
@@ -173,7 +172,7 @@ fn for_each_slab<S: Send>(
 }
 
 /// [`for_each_slab`], with the largest Gaussian activation of each row of the block
-/// (`coverage::push_max_activations`, taken from the pattern while it is formed) handed to
+/// (`features::push_max_activations`, taken from the pattern while it is formed) handed to
 /// `consume` when `maxima` (an empty slice otherwise).
 fn for_each_slab_observed<S: Send>(
     fm: &FeatureMap,
