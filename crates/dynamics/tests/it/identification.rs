@@ -159,15 +159,23 @@ fn recovers_an_arm_on_motion_it_never_saw() {
     assert!(ident.summary.base_parameters > 7 && ident.summary.base_parameters < 70);
 }
 
+/// The multi-sine motion of seed 0.9 for `seconds` and its torques with deterministic
+/// pseudo-noise, uniform on +-`amplitude` (N m; `frequency` picks the sequence).
+fn noisy_recording(model: &Model, seconds: f64, frequency: f64, amplitude: f64) -> [Vec<f64>; 4] {
+    let (q, qd, qdd) = motion(model, 0.9, seconds);
+    let mut tau = torques(model, &truth_terms(model.nq()), &q, &qd, &qdd);
+    for (k, t) in tau.iter_mut().enumerate() {
+        let uniform = ((k as f64 * frequency).sin() * 43758.5453).rem_euclid(1.0);
+        *t += amplitude * (2.0 * uniform - 1.0);
+    }
+    [q, qd, qdd, tau]
+}
+
 #[test]
 fn noisy_torques_are_not_fitted_to_the_noise() {
     let urdf = common::baxter();
-    let (q, qd, qdd) = motion(&urdf, 0.9, 40.0);
-    let mut tau = torques(&urdf, &truth_terms(7), &q, &qd, &qdd);
     // Deterministic pseudo-noise, 1 N m.
-    for (k, t) in tau.iter_mut().enumerate() {
-        *t += ((k as f64 * 12.9898).sin() * 43758.5453).rem_euclid(1.0) * 2.0 - 1.0;
-    }
+    let [q, qd, qdd, tau] = noisy_recording(&urdf, 40.0, 12.9898, 1.0);
     let train = Samples {
         q: &q,
         qdot: &qd,
@@ -189,11 +197,7 @@ fn noisy_torques_are_not_fitted_to_the_noise() {
 #[test]
 fn a_ridge_tolerance_takes_the_strongest_ridge_near_the_best() {
     let urdf = common::baxter();
-    let (q, qd, qdd) = motion(&urdf, 0.9, 30.0);
-    let mut tau = torques(&urdf, &truth_terms(7), &q, &qd, &qdd);
-    for (k, t) in tau.iter_mut().enumerate() {
-        *t += ((k as f64 * 78.233).sin() * 43758.5453).rem_euclid(1.0) - 0.5;
-    }
+    let [q, qd, qdd, tau] = noisy_recording(&urdf, 30.0, 78.233, 0.5);
     let train = Samples {
         q: &q,
         qdot: &qd,
