@@ -342,6 +342,7 @@ fn ridge_for(
     }
     let half = 10f64.sqrt();
     if choice.tolerance == 0.0 {
+        // The first best on ties, as before the tolerance existed: fits without it unchanged.
         let coarse = best_of(ridge_grid().map(score), f64::NAN);
         if coarse.0.is_nan() {
             return coarse;
