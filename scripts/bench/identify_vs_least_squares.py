@@ -26,6 +26,11 @@ Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.c
 120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
 `admittance.mujoco.arms` in MuJoCo (60 s of `adm.excitation(m, 60, seed=1)` train, 30 s of
 other free motion, `seed=2`, are scored; the plant, sensors and PD of that table).
+`--torque-scale F` multiplies every recorded torque by F, training and scored alike: a torque
+signal of another size than the URDF's arm (a torque constant or gear ratio off).
+`--drop-rows P` drops a random fraction P of the MuJoCo training recordings' rows (a logger
+that lost samples; the time column keeps the true times of the rows left); the scored
+recording stays whole, as a control loop's samples are.
 """
 
 from __future__ import annotations
@@ -223,6 +228,7 @@ def compare(label, m, pmodel, train, scored, log):
             "identify_seconds": seconds,
             "chosen_input_filter_hz": summary.get("input_filter_hz"),
             "delay_s": summary.get("delay_s"),
+            "prior_scale": summary.get("prior_scale"),
         }
         points.append(point)
         log(
@@ -232,7 +238,12 @@ def compare(label, m, pmodel, train, scored, log):
     return points
 
 
-def baxter(log):
+def scale_torque(data, factor):
+    """``data`` with its torque column times ``factor``."""
+    return {**data, "tau": np.asarray(data["tau"]) * factor} if factor != 1.0 else data
+
+
+def baxter(log, torque_scale=1.0):
     folder = os.environ.get("ADMITTANCE_DATA")
     path = pathlib.Path(folder or "") / "baxter_rand" / "baxter_rand.csv"
     if not folder or not path.is_file():
@@ -247,12 +258,22 @@ def baxter(log):
     for key in ("q", "qdot", "qddot", "tau"):
         data[key] = np.stack([table[:, col[f"{key}.{j}"]] for j in m.joint_names], axis=1)
     t = data["t"]
+    data = scale_torque(data, torque_scale)
     train = rows(data, t < 120.0)
     scored = {"data": data, "mask": t >= t[-1] - 30.0 + 1e-9}
     return compare("Baxter (real), 120 s -> 30 s", m, pinocchio_chain(urdf, m.joint_names), train, scored, log)
 
 
-def mujoco_arm(name, log, cfg):
+def drop_rows(data, fraction, seed):
+    """``data`` without a random ``fraction`` of its rows (the first and last kept)."""
+    if fraction <= 0.0:
+        return data
+    keep = np.random.default_rng(seed).random(len(data["t"])) >= fraction
+    keep[[0, -1]] = True
+    return {k: (np.asarray(v)[keep] if k in ("t", "q", "qdot", "qddot", "tau") else v) for k, v in data.items()}
+
+
+def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0):
     from admittance.mujoco import _arms
     from admittance.mujoco._plant import MujocoArm
 
@@ -267,6 +288,8 @@ def mujoco_arm(name, log, cfg):
     rng = np.random.default_rng(cfg.seed)
     train, _, _ = _arms.record(arm, m, train_motion, gains, cfg, rng)
     free, _, _ = _arms.record(arm, m, eval_motion, gains, cfg, rng)
+    train, free = scale_torque(train, torque_scale), scale_torque(free, torque_scale)
+    train = drop_rows(train, dropped, 7)  # the scored recording stays whole: a loop's even rate
     scored = {"data": free, "mask": free["t"] >= cfg.evaluation_start}
     pmodel = pinocchio_chain(path, m.joint_names)
     check_regressor(m, pmodel, train, name)
@@ -294,6 +317,18 @@ def main():
     parser.add_argument("--training-duration", type=float, default=60.0, help="MuJoCo training recording (s)")
     parser.add_argument("--evaluation-duration", type=float, default=30.0, help="MuJoCo scored recording (s)")
     parser.add_argument("--json", help="write every point to this file")
+    parser.add_argument(
+        "--drop-rows",
+        type=float,
+        default=0.0,
+        help="drop this fraction of the MuJoCo training recordings' rows at random (a logger that lost samples)",
+    )
+    parser.add_argument(
+        "--torque-scale",
+        type=float,
+        default=1.0,
+        help="multiply every recorded torque by this (a torque constant or gear ratio off against the URDF)",
+    )
     args = parser.parse_args()
     cfg = _arms.ArmsConfig(training_duration=args.training_duration, evaluation_duration=args.evaluation_duration)
 
@@ -301,9 +336,9 @@ def main():
         print(text, flush=True)
 
     log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
-    points = [] if args.no_baxter else baxter(log)
+    points = [] if args.no_baxter else baxter(log, args.torque_scale)
     for name in args.arms:
-        points += mujoco_arm(name, log, cfg)
+        points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows)
     ratios = [p["ratio"] for p in points]
     if not ratios:
         sys.exit("no recording")

@@ -193,6 +193,21 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         folds: args.folds,
         ..Default::default()
     };
+    for (path, recording) in [
+        (Some(&args.data), Some(&data)),
+        (args.validation.as_ref(), validation.as_ref()),
+    ] {
+        if let (Some(path), Some((_, found))) = (
+            path,
+            recording.and_then(admittance_scenario::evenly_sampled),
+        ) {
+            eprintln!(
+                "admittance: warning: {}: {}",
+                path.display(),
+                found.describe()
+            );
+        }
+    }
     let started = std::time::Instant::now();
     let spinner = crate::progress::Spinner::start(
         crate::progress::wanted(args.quiet),
@@ -289,6 +304,13 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         s.acceleration_gain,
         1e3 * s.step_response_s
     );
+    if s.prior_scale != 1.0 {
+        text += &format!(
+            "the torque is {:.3} times what the URDF's arm needs (a torque constant, gear ratio, unit or \
+             masses off?): the bodies were pulled toward the URDF scaled by it\n",
+            s.prior_scale
+        );
+    }
     let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
     for (i, name) in arm.joint_names().enumerate() {
         text += &format!(

@@ -213,6 +213,22 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
     repeat_period_of_positions(&q, n, folds)
 }
 
+/// Warns (Python `UserWarning`) when `arg`'s time column has gaps, which the identification
+/// interpolates onto an even grid before the fixed-rate conditioning.
+pub(crate) fn warn_gaps(py: Python<'_>, arg: &str, data: &FreeMotionData) -> PyResult<()> {
+    let Some((_, found)) = admittance_scenario::evenly_sampled(data) else {
+        return Ok(());
+    };
+    let message =
+        std::ffi::CString::new(format!("`{arg}`: {}", found.describe())).unwrap_or_default();
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &message,
+        1,
+    )
+}
+
 /// Warns (Python `UserWarning`) that `arg`'s motion repeats every `period` samples.
 pub(crate) fn warn_repeating(py: Python<'_>, arg: &str, period: usize) -> PyResult<()> {
     let message = std::ffi::CString::new(format!(

@@ -161,6 +161,10 @@ pub fn identify(
             crate::free_motion::warn_repeating(py, "data", period)?;
         }
     }
+    crate::free_motion::warn_gaps(py, "data", &train)?;
+    if let Some(v) = &validation {
+        crate::free_motion::warn_gaps(py, "validation", v)?;
+    }
     let (ident, _tried) = py
         .detach(|| {
             admittance_scenario::identify_recording(

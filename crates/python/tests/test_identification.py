@@ -177,3 +177,37 @@ def test_import_bag_gives_the_free_motion_dict():
     assert "topics:" in d["report"]
     with pytest.raises(ValueError, match="rosbags-convert"):
         adm.import_bag(BAGS / "franka_sqlite", "franka")
+
+
+def other_motion_error(ident, baxter, friction, scale=1.0):
+    _, q, qd, qdd = multisine(baxter, 7, 10.0)
+    truth = scale * torques(baxter, q, qd, qdd, friction)
+    return float(np.sqrt(np.mean((ident.predict(q, qd, qdd) - truth) ** 2)))
+
+
+def test_a_torque_of_another_size_scales_the_prior(baxter, truth_and_data):
+    """A torque 7 % larger than the URDF's arm (a torque constant off): the fit is pulled
+    toward the URDF at that size and says so in its summary."""
+    friction, data = truth_and_data
+    scaled = {**data, "tau": 1.07 * data["tau"]}
+    ident = adm.identify(scaled, baxter, input_filter_hz=0)
+    assert abs(ident.summary["prior_scale"] - 1.07) < 0.005, ident.summary["prior_scale"]
+    assert adm.identify(data, baxter, input_filter_hz=0).summary["prior_scale"] == 1.0
+    at_size = adm.identify(data, baxter, input_filter_hz=0)
+    assert other_motion_error(ident, baxter, friction, 1.07) < 1.1 * 1.07 * other_motion_error(at_size, baxter, friction)
+
+
+def test_dropped_rows_are_put_back_on_an_even_grid(baxter, truth_and_data):
+    """3 % of the rows dropped (a logger that lost messages): the conditioning runs on an even
+    grid again, the summary says what was interpolated, and the fit is as good as on the
+    whole recording."""
+    friction, data = truth_and_data
+    keep = np.random.default_rng(3).random(len(data["t"])) > 0.03
+    dropped = {k: np.asarray(v)[keep] for k, v in data.items()}
+    whole = adm.identify(data, baxter, input_filter_hz=4.0)
+    with pytest.warns(UserWarning, match="gaps in the time column"):
+        ident = adm.identify(dropped, baxter, input_filter_hz=4.0)
+    assert "gaps in the time column" in ident.summary["held_out"], ident.summary["held_out"]
+    assert "gaps" not in whole.summary["held_out"]
+    e_whole, e_dropped = other_motion_error(whole, baxter, friction), other_motion_error(ident, baxter, friction)
+    assert e_dropped < 1.2 * e_whole, (e_dropped, e_whole)

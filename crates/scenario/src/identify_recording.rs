@@ -9,6 +9,7 @@
 
 use admittance_dynamics::{identify, Identification, IdentificationSettings, Model, Samples};
 
+use crate::even_sampling::{evenly_sampled, rows_until};
 use crate::free_motion::{observer_training_arrays, FreeMotionData};
 
 /// Cut-offs tried when the caller gives none (Hz; 0: the signals as recorded). None is
@@ -152,6 +153,21 @@ pub fn identify_recording(
     settings: &IdentificationSettings,
     input_filter_hz: Option<f64>,
 ) -> Result<(Identification, Vec<CutoffTrial>), String> {
+    // Dropped samples put back on an even grid: the conditioning is a fixed-rate filter.
+    let even_train = evenly_sampled(train);
+    let rows = match &even_train {
+        Some((even, found)) if rows > 0 => {
+            let last = train.t[rows.min(train.len()) - 1];
+            rows_until(even.t[0], found.step_s, last).min(even.len())
+        }
+        _ => rows,
+    };
+    let train = even_train.as_ref().map_or(train, |(even, _)| even);
+    let even_validation = validation.and_then(evenly_sampled);
+    let validation = match &even_validation {
+        Some((even, _)) => Some(even),
+        None => validation,
+    };
     let rate = sample_rate_hz(train);
     let candidates: Vec<f64> = match input_filter_hz {
         Some(f) => vec![f],
@@ -226,6 +242,11 @@ pub fn identify_recording(
                 ident.summary.held_out,
                 100.0 * settings.ridge_tolerance
             );
+        }
+        for (which, found) in [("training", &even_train), ("validation", &even_validation)] {
+            if let Some((_, found)) = found {
+                ident.summary.held_out += &format!("; {which} recording: {}", found.describe());
+            }
         }
         ident.summary.step_response_s = conditioning_step_response_s(cutoff, rate)
             + ident.summary.delay_s.iter().copied().fold(0.0, f64::max);

@@ -36,6 +36,7 @@ mod contact_run;
 mod contact_score;
 mod context;
 mod error;
+mod even_sampling;
 mod external;
 mod free_motion;
 mod gate_stage;
@@ -67,6 +68,7 @@ pub use contact::{
 };
 pub use contact_score::ContactMetrics;
 pub use error::ScenarioError;
+pub use even_sampling::{evenly_sampled, Resampling};
 pub use external::{ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
 pub use identify_recording::{

@@ -257,3 +257,63 @@ fn a_scenario_runs_its_momentum_observer_on_an_identification() {
     assert!(!o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("observer.identification"), "{}", text(&o));
 }
+
+/// A recording with rows lost and a torque 8 % larger than the URDF's arm (a torque constant
+/// off): `identify` warns about the gaps it interpolated and says the scale it pulled toward.
+#[test]
+fn dropped_rows_and_a_torque_of_another_size_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let whole = std::fs::read_to_string(synthetic_csv(dir.path(), 0.3, 30.0)).unwrap();
+    let mut lines = whole.lines();
+    let header = lines.next().unwrap();
+    let torque: Vec<bool> = header
+        .split(',')
+        .map(|c| c.trim().starts_with("tau."))
+        .collect();
+    let mut edited = format!("{header}\n");
+    for (_, line) in lines.enumerate().filter(|(k, _)| k % 25 != 7) {
+        let cells: Vec<String> = line
+            .split(',')
+            .zip(&torque)
+            .map(|(c, &t)| {
+                if t {
+                    format!("{}", 1.08 * c.trim().parse::<f64>().unwrap())
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect();
+        edited += &(cells.join(",") + "\n");
+    }
+    let data = dir.path().join("lossy.csv");
+    std::fs::write(&data, edited).unwrap();
+    let out = dir.path().join("lossy.ident.json");
+    let o = admittance(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        // The columns as recorded: through a 4 Hz filter this synthetic friction's square
+        // wave no longer matches its model, and the scale read 1.053.
+        "--input-filter-hz",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let printed = text(&o);
+    assert!(printed.contains("gaps in the time column"), "{printed}");
+    let line = printed
+        .lines()
+        .find(|l| l.starts_with("the torque is "))
+        .unwrap_or_else(|| panic!("{printed}"));
+    let scale: f64 = line["the torque is ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((scale - 1.08).abs() < 0.01, "{line}");
+}

@@ -257,6 +257,12 @@ fn check_summary(s: &IdentificationSummary, n: usize) -> Result<(), String> {
             s.acceleration_gain
         ));
     }
+    if !(s.prior_scale > 0.0 && s.prior_scale.is_finite()) {
+        return Err(format!(
+            "summary.prior_scale is {}: must be a finite positive factor",
+            s.prior_scale
+        ));
+    }
     if !(s.delay_s.is_empty() || s.delay_s.len() == n) {
         return Err(format!(
             "summary.delay_s has {} values for {n} joints",

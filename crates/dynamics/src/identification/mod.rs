@@ -25,6 +25,7 @@ mod held_out;
 mod joint_terms;
 mod normal;
 mod payload;
+mod prior_scale;
 mod samples;
 mod settings;
 mod springs;
@@ -115,6 +116,14 @@ pub struct IdentificationSummary {
     /// itself is untouched (the momentum observer never uses `q''`).
     #[serde(default = "unit_gain")]
     pub acceleration_gain: f64,
+    /// The factor on the URDF's inertial parameters that the ridge pulls toward: the
+    /// least-squares scale of the URDF's gravity and Coriolis torque to the recorded torque
+    /// (its inertial torque, friction, offsets and springs beside it), or 1 when that is
+    /// within 1 % of 1 or implausible (outside 0.25 to 4). Away from 1 it says that the
+    /// torque and the URDF disagree in size (a torque constant or gear ratio, the torque's
+    /// units, masses uniformly off); the fitted bodies carry it.
+    #[serde(default = "unit_gain")]
+    pub prior_scale: f64,
 }
 
 fn unit_gain() -> f64 {
@@ -316,6 +325,7 @@ impl IdentificationSummary {
             delay_s: Vec::new(),
             step_response_s: 0.0,
             acceleration_gain: 1.0,
+            prior_scale: 1.0,
         }
     }
 }

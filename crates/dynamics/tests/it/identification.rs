@@ -327,3 +327,71 @@ fn files_round_trip_and_refuse_damage_and_other_arms() {
     assert!(ident.save(&user, &urdf, data).is_err());
     assert_eq!(std::fs::read_to_string(&user).unwrap(), "{\"mine\": 1}");
 }
+
+/// Rms error of `ident`'s prediction against `tau` on the motion `(q, qd, qdd)`.
+fn prediction_error(ident: &Identification, [q, qd, qdd, tau]: &[Vec<f64>; 4]) -> f64 {
+    let n = ident.model.nq();
+    let mut data = Data::new(&ident.model);
+    let mut out = vec![0.0; n];
+    let mut pred = Vec::with_capacity(tau.len());
+    for k in 0..q.len() / n {
+        let r = k * n..(k + 1) * n;
+        ident
+            .predict(&mut data, &q[r.clone()], &qd[r.clone()], &qdd[r], &mut out)
+            .unwrap();
+        pred.extend_from_slice(&out);
+    }
+    rms(&pred, tau)
+}
+
+#[test]
+fn a_torque_of_another_size_than_the_urdf_scales_the_prior() {
+    let urdf = common::baxter();
+    // A torque signal 8 % larger than the URDF's arm gives (a torque constant off), noisy.
+    let scaled = |mut r: [Vec<f64>; 4]| {
+        r[3].iter_mut().for_each(|t| *t *= 1.08);
+        r
+    };
+    let train = scaled(noisy_recording(&urdf, 30.0, 78.233, 0.5));
+    let (q2, qd2, qdd2) = motion(&urdf, 1.7, 20.0);
+    let tau2 = torques(&urdf, &truth_terms(7), &q2, &qd2, &qdd2);
+    let new_motion = [q2, qd2, qdd2, tau2];
+    let new_scaled = scaled(new_motion.clone());
+    let fit = |r: &[Vec<f64>; 4], tolerance: f64| {
+        let samples = Samples {
+            q: &r[0],
+            qdot: &r[1],
+            qddot: &r[2],
+            tau: &r[3],
+            dof: 7,
+        };
+        let settings = IdentificationSettings {
+            ridge_tolerance: tolerance,
+            ..Default::default()
+        };
+        identify(&urdf, &samples, None, &settings).unwrap()
+    };
+    let mass = |m: &Model| m.bodies.iter().map(|b| b.mass).sum::<f64>();
+    for tolerance in [0.0, 0.05] {
+        let ident = fit(&train, tolerance);
+        let s = ident.summary.prior_scale;
+        let ratio = mass(&ident.model) / mass(&urdf);
+        assert!(
+            (s - 1.08).abs() < 0.005,
+            "tolerance {tolerance}: prior_scale {s}"
+        );
+        assert!(
+            (ratio - 1.08).abs() < 0.01,
+            "tolerance {tolerance}: mass ratio {ratio}"
+        );
+        // On new motion as good as the same recording at the URDF's size, scaled.
+        let at_size = fit(&noisy_recording(&urdf, 30.0, 78.233, 0.5), tolerance);
+        assert_eq!(at_size.summary.prior_scale, 1.0);
+        let err = prediction_error(&ident, &new_scaled);
+        let reference = 1.08 * prediction_error(&at_size, &new_motion);
+        assert!(
+            err < 1.1 * reference,
+            "tolerance {tolerance}: {err} vs {reference}"
+        );
+    }
+}

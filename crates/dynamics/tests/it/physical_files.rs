@@ -133,6 +133,8 @@ fn what_consumers_take_from_the_summary_is_checked() {
     })
     .unwrap_err();
     assert!(e.contains("summary.acceleration_gain is 3"), "{e}");
+    let e = load_edited(dir.path(), |p| p["summary"]["prior_scale"] = (-1.0).into()).unwrap_err();
+    assert!(e.contains("summary.prior_scale is -1"), "{e}");
     let e = load_edited(dir.path(), |p| {
         p["summary"]["delay_s"] = serde_json::json!([1e9, 0, 0, 0, 0, 0, 0])
     })
