@@ -13,6 +13,7 @@ use crate::identification::held_out::{
 use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
 use crate::identification::normal::{accumulate, columns, solve, JointSums, Normal, NormalParts};
 use crate::identification::prior_scale::{prior_scale, scaled};
+use crate::identification::recording_checks::check_against_urdf;
 use crate::identification::samples::Samples;
 use crate::identification::settings::IdentificationSettings;
 use crate::identification::springs::{choose_springs, joint_column, Choice};
@@ -80,6 +81,10 @@ pub fn identify(
     let n = model.nq();
     check_sizes(train, validation, settings, n)?;
     check_motion(train, "training samples")?;
+    check_against_urdf(model, train, "training samples")?;
+    if let Some(v) = validation {
+        check_against_urdf(model, v, "validation samples")?;
+    }
     let width = settings.coulomb_width;
     let p = columns(n);
     let mut prior = DVector::zeros(p);
@@ -114,7 +119,7 @@ pub fn identify(
     // arms whose torque was 1.05 times the URDF's, where the scaled prior lowered the false
     // torque on new motion by up to 19 % (docs/experiments.md).
     let urdf = prior;
-    let (prior_scale, prior) = match prior_scale(model, train, width) {
+    let (prior_scale, prior) = match prior_scale(model, train, width)? {
         Some(s) => (s, scaled(&urdf, s, n)),
         None => (1.0, urdf.clone()),
     };

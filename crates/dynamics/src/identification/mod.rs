@@ -26,6 +26,7 @@ mod joint_terms;
 mod normal;
 mod payload;
 mod prior_scale;
+mod recording_checks;
 mod samples;
 mod settings;
 mod springs;

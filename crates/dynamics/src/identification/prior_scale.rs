@@ -13,6 +13,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
 use crate::algorithms::rnea::{nonlinear_effects, rnea};
 use crate::data::Data;
+use crate::error::DynamicsError;
 use crate::identification::joint_terms::{features, JOINT_FEATURES};
 use crate::identification::samples::Samples;
 use crate::model::Model;
@@ -29,19 +30,27 @@ const MIN_DEVIATION: f64 = 0.01;
 
 /// The least-squares `s` of `tau ~ s h(q, q') + a M(q) q'' + J x` on `samples`, with `h` the
 /// URDF's gravity and Coriolis torque, `M q''` its inertial torque and every joint feature
-/// `J` (friction, offsets, springs: not the URDF's to scale) as nuisance terms; or `None`
-/// when it is not a plausible scale ([`SCALE_RANGE`]), is within [`MIN_DEVIATION`] of 1 or
-/// the system is singular. The inertial torque has its own factor because a measured `q''`
-/// is noisy: sharing `s` with it, the noise pulled the scale of simulated arms whose torque
-/// has the URDF's size down to 0.54-0.86 on unfiltered signals.
-pub(super) fn prior_scale(model: &Model, samples: &Samples, width: f64) -> Option<f64> {
+/// `J` (friction, offsets, springs: not the URDF's to scale) as nuisance terms; `None` when
+/// it is within [`MIN_DEVIATION`] of 1, the system is singular, or `s h` explains too little
+/// of the torque to tell (below [`EXPLAINED`]: `s` is then noise). A scale outside
+/// [`SCALE_RANGE`] that explains the torque is refused: the torque is in other units, has the
+/// opposite sign, or the URDF is not the arm's. The inertial torque has its own factor
+/// because a measured `q''` is noisy: sharing `s` with it, the noise pulled the scale of
+/// simulated arms whose torque has the URDF's size down to 0.54-0.86 on unfiltered signals.
+pub(super) fn prior_scale(
+    model: &Model,
+    samples: &Samples,
+    width: f64,
+) -> Result<Option<f64>, DynamicsError> {
     let n = model.nq();
     let m = 2 + JOINT_FEATURES * n;
     let mut gram = DMatrix::<f64>::zeros(m, m);
     let mut rhs = DVector::<f64>::zeros(m);
+    let mut tau_sq = 0.0;
     let mut data = Data::new(model);
     let mut row = vec![0.0; 2 + JOINT_FEATURES];
     let mut f = [0.0; JOINT_FEATURES];
+    let mut bias = vec![0.0; n];
     for k in 0..samples.len() {
         let r = k * n..(k + 1) * n;
         let (q, qd, qdd) = (
@@ -49,10 +58,13 @@ pub(super) fn prior_scale(model: &Model, samples: &Samples, width: f64) -> Optio
             &samples.qdot[r.clone()],
             &samples.qddot[r.clone()],
         );
-        let bias = nonlinear_effects(model, &mut data, q, qd)
-            .ok()?
-            .clone_owned();
-        let total = rnea(model, &mut data, q, qd, qdd).ok()?;
+        let Ok(h) = nonlinear_effects(model, &mut data, q, qd) else {
+            return Ok(None);
+        };
+        bias.copy_from_slice(h.as_slice());
+        let Ok(total) = rnea(model, &mut data, q, qd, qdd) else {
+            return Ok(None);
+        };
         for i in 0..n {
             features(q[i], qd[i], qdd[i], width, &mut f);
             row[0] = bias[i];
@@ -67,6 +79,7 @@ pub(super) fn prior_scale(model: &Model, samples: &Samples, width: f64) -> Optio
                 }
             };
             let tau = samples.tau[k * n + i];
+            tau_sq += tau * tau;
             for (a, &x) in row.iter().enumerate() {
                 rhs[col(a)] += x * tau;
                 for (b, &y) in row.iter().enumerate() {
@@ -75,17 +88,36 @@ pub(super) fn prior_scale(model: &Model, samples: &Samples, width: f64) -> Optio
             }
         }
     }
-    if !(gram[(0, 0)] > 0.0) {
-        return None;
+    let urdf_sq = gram[(0, 0)];
+    if !(urdf_sq > 0.0 && tau_sq > 0.0) {
+        return Ok(None);
     }
     for c in 1..m {
         // A negligible ridge, as the fit gives joint terms: constant features of a joint
         // that hardly moves must not make the system singular.
         gram[(c, c)] += 1e-9 * gram[(c, c)].max(1e-300);
     }
-    let s = gram.cholesky()?.solve(&rhs)[0];
-    (s.is_finite() && SCALE_RANGE.contains(&s) && (s - 1.0).abs() > MIN_DEVIATION).then_some(s)
+    let Some(factor) = gram.cholesky() else {
+        return Ok(None);
+    };
+    let s = factor.solve(&rhs)[0];
+    if !s.is_finite() || s * s * urdf_sq < EXPLAINED * tau_sq {
+        return Ok(None);
+    }
+    if !SCALE_RANGE.contains(&s) {
+        return Err(DynamicsError::InvalidArgument(format!(
+            "training samples: the recorded torque is {s:.3} times what the URDF's arm needs (gravity and \
+             Coriolis): give it in N m, with the sign of the torque the joints apply, and a URDF \
+             with the arm's masses"
+        )));
+    }
+    Ok(((s - 1.0).abs() > MIN_DEVIATION).then_some(s))
 }
+
+/// The share of the recorded torque's mean square that the scaled URDF torque must reach for
+/// its scale to be read (a horizontal arm's gravity-free torque tells no scale). The simulated
+/// arms' gravity and Coriolis torque reach 0.21 (SO-101, friction-heavy) to 1.00 (UR10).
+const EXPLAINED: f64 = 0.1;
 
 /// `prior` with its inertial parameters (the first `10 bodies`) times `scale`.
 pub(super) fn scaled(prior: &DVector<f64>, scale: f64, bodies: usize) -> DVector<f64> {

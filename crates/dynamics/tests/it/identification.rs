@@ -395,3 +395,40 @@ fn a_torque_of_another_size_than_the_urdf_scales_the_prior() {
         );
     }
 }
+
+/// A recording that cannot be of the URDF's arm as written is refused, naming the joint or
+/// the unit: angles in degrees, one joint's torque sign flipped, a torque in mN m.
+#[test]
+fn recordings_that_cannot_be_the_urdfs_arm_are_refused() {
+    let urdf = common::baxter();
+    let [q, qd, qdd, tau] = noisy_recording(&urdf, 20.0, 12.9898, 0.1);
+    let fit = |q: &[f64], qd: &[f64], qdd: &[f64], tau: &[f64]| {
+        let samples = Samples {
+            q,
+            qdot: qd,
+            qddot: qdd,
+            tau,
+            dof: 7,
+        };
+        identify(&urdf, &samples, None, &IdentificationSettings::default())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    assert_eq!(fit(&q, &qd, &qdd, &tau), Ok(()));
+    let degrees = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
+    let e = fit(&degrees(&q), &degrees(&qd), &degrees(&qdd), &tau).unwrap_err();
+    assert!(
+        e.contains("beyond its URDF limits") && e.contains("radians"),
+        "{e}"
+    );
+    let mut flipped = tau.clone();
+    flipped.iter_mut().skip(1).step_by(7).for_each(|t| *t = -*t);
+    let e = fit(&q, &qd, &qdd, &flipped).unwrap_err();
+    assert!(e.contains("joint left_s1's torque runs opposite"), "{e}");
+    let milli: Vec<f64> = tau.iter().map(|t| 1e3 * t).collect();
+    let e = fit(&q, &qd, &qdd, &milli).unwrap_err();
+    assert!(
+        e.contains("training samples: the recorded torque is 999.") && e.contains("in N m"),
+        "{e}"
+    );
+}
