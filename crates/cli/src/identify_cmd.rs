@@ -297,6 +297,13 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
         s.projected_bodies, "joint", "URDF", "identified", "springs"
     );
+    if s.prior_scale != 1.0 {
+        text = format!(
+            "the torque is {:.3} times what the URDF's arm needs (a torque constant, gear ratio, unit or \
+             masses off?): the bodies were pulled toward the URDF scaled by it\n{text}",
+            s.prior_scale
+        );
+    }
     text = format!(
         "signals: input filter {}, torque delay {}, acceleration gain {}, estimate's 90 % step response {:.0} ms\n{text}",
         filter_name(s.input_filter_hz),
@@ -304,13 +311,6 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         s.acceleration_gain,
         1e3 * s.step_response_s
     );
-    if s.prior_scale != 1.0 {
-        text += &format!(
-            "the torque is {:.3} times what the URDF's arm needs (a torque constant, gear ratio, unit or \
-             masses off?): the bodies were pulled toward the URDF scaled by it\n",
-            s.prior_scale
-        );
-    }
     let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
     for (i, name) in arm.joint_names().enumerate() {
         text += &format!(
