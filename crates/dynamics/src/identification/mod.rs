@@ -120,7 +120,8 @@ pub struct IdentificationSummary {
     /// The factor on the URDF's inertial parameters that the ridge pulls toward: the
     /// least-squares scale of the URDF's gravity and Coriolis torque to the recorded torque
     /// (its inertial torque, friction, offsets and springs beside it), or 1 when that is
-    /// within 1 % of 1 or implausible (outside 0.25 to 4). Away from 1 it says that the
+    /// within 1 % of 1 or the URDF's torque explains too little of the recorded one to tell
+    /// (`identify` refuses a scale outside 0.25 to 4 that it explains). Away from 1 it says that the
     /// torque and the URDF disagree in size (a torque constant or gear ratio, the torque's
     /// units, masses uniformly off); the fitted bodies carry it.
     #[serde(default = "unit_gain")]
