@@ -171,18 +171,23 @@ fn noisy_recording(model: &Model, seconds: f64, frequency: f64, amplitude: f64) 
     [q, qd, qdd, tau]
 }
 
+/// The identification samples of a 7-joint recording `[q, qdot, qddot, tau]`.
+fn samples(r: &[Vec<f64>; 4]) -> Samples<'_> {
+    Samples {
+        q: &r[0],
+        qdot: &r[1],
+        qddot: &r[2],
+        tau: &r[3],
+        dof: 7,
+    }
+}
+
 #[test]
 fn noisy_torques_are_not_fitted_to_the_noise() {
     let urdf = common::baxter();
     // Deterministic pseudo-noise, 1 N m.
-    let [q, qd, qdd, tau] = noisy_recording(&urdf, 40.0, 12.9898, 1.0);
-    let train = Samples {
-        q: &q,
-        qdot: &qd,
-        qddot: &qdd,
-        tau: &tau,
-        dof: 7,
-    };
+    let recording = noisy_recording(&urdf, 40.0, 12.9898, 1.0);
+    let train = samples(&recording);
     let ident = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
     // Held-out error is about the noise (uniform on +-1: rms 0.577), not below it.
     for e in &ident.summary.expected_false_torque_rms {
@@ -197,14 +202,8 @@ fn noisy_torques_are_not_fitted_to_the_noise() {
 #[test]
 fn a_ridge_tolerance_takes_the_strongest_ridge_near_the_best() {
     let urdf = common::baxter();
-    let [q, qd, qdd, tau] = noisy_recording(&urdf, 30.0, 78.233, 0.5);
-    let train = Samples {
-        q: &q,
-        qdot: &qd,
-        qddot: &qdd,
-        tau: &tau,
-        dof: 7,
-    };
+    let recording = noisy_recording(&urdf, 30.0, 78.233, 0.5);
+    let train = samples(&recording);
     let fit = |tolerance: f64| {
         let settings = IdentificationSettings {
             ridge_tolerance: tolerance,
@@ -358,18 +357,11 @@ fn a_torque_of_another_size_than_the_urdf_scales_the_prior() {
     let new_motion = [q2, qd2, qdd2, tau2];
     let new_scaled = scaled(new_motion.clone());
     let fit = |r: &[Vec<f64>; 4], tolerance: f64| {
-        let samples = Samples {
-            q: &r[0],
-            qdot: &r[1],
-            qddot: &r[2],
-            tau: &r[3],
-            dof: 7,
-        };
         let settings = IdentificationSettings {
             ridge_tolerance: tolerance,
             ..Default::default()
         };
-        identify(&urdf, &samples, None, &settings).unwrap()
+        identify(&urdf, &samples(r), None, &settings).unwrap()
     };
     let mass = |m: &Model| m.bodies.iter().map(|b| b.mass).sum::<f64>();
     for tolerance in [0.0, 0.05] {
@@ -403,16 +395,15 @@ fn recordings_that_cannot_be_the_urdfs_arm_are_refused() {
     let urdf = common::baxter();
     let [q, qd, qdd, tau] = noisy_recording(&urdf, 20.0, 12.9898, 0.1);
     let fit = |q: &[f64], qd: &[f64], qdd: &[f64], tau: &[f64]| {
-        let samples = Samples {
-            q,
-            qdot: qd,
-            qddot: qdd,
-            tau,
-            dof: 7,
-        };
-        identify(&urdf, &samples, None, &IdentificationSettings::default())
-            .map(|_| ())
-            .map_err(|e| e.to_string())
+        let r = [q.to_vec(), qd.to_vec(), qdd.to_vec(), tau.to_vec()];
+        identify(
+            &urdf,
+            &samples(&r),
+            None,
+            &IdentificationSettings::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| e.to_string())
     };
     assert_eq!(fit(&q, &qd, &qdd, &tau), Ok(()));
     let degrees = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
