@@ -51,6 +51,16 @@ fn algorithms(c: &mut Criterion) {
             black_box(gravity_torque(&model, &mut data, q).is_ok())
         })
     });
+    // The plant's force evaluation: M (composite pass), C v + G and G on one set of
+    // placements; without M, the difference is the composite pass.
+    group.bench_function("mass_matrix_and_bias", |b| {
+        b.iter(|| {
+            black_box(mass_matrix_and_bias(&model, &mut data, black_box(&q), &v, true).is_ok())
+        })
+    });
+    group.bench_function("bias_and_gravity", |b| {
+        b.iter(|| black_box(bias_and_gravity(&model, &mut data, black_box(&q), &v, true).is_ok()))
+    });
     group.bench_function("gravity", |b| {
         b.iter(|| black_box(gravity_torque(&model, &mut data, black_box(&q)).is_ok()))
     });

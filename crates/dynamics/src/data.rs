@@ -53,6 +53,8 @@ pub struct Data {
     pub regressor: DMatrix<f64>,
 
     pub(crate) composite: Vec<Inertia>,
+    /// Body weights carried down the chain by `mass_matrix_and_bias`'s gravity recursion.
+    pub(crate) gravity_forces: Vec<Force>,
     pub(crate) world_subspace: Vec<Vector6<f64>>,
     pub(crate) world_subspace_rate: Vec<Vector6<f64>>,
     pub(crate) world_velocity: Vec<Motion>,
@@ -89,6 +91,7 @@ impl Data {
             jdot_qdot: Vector6::zeros(),
             regressor: DMatrix::zeros(n, 10 * n),
             composite: vec![Inertia::zero(); n],
+            gravity_forces: vec![Force::zero(); n],
             world_subspace: vec![Vector6::zeros(); n],
             world_subspace_rate: vec![Vector6::zeros(); n],
             world_velocity: vec![Motion::zero(); n],

@@ -42,14 +42,12 @@ pub use algorithms::crba::crba;
 pub use algorithms::energy::{kinetic_energy, potential_energy};
 pub use algorithms::jacobian::{frame_jacobian, frame_jdot_qdot, tip_jacobian, tip_jdot_qdot};
 pub use algorithms::kinematics::{forward_kinematics, update_frame_placements};
+pub use algorithms::mass_and_bias::{bias_and_gravity, mass_matrix_and_bias};
 pub use algorithms::momentum::momentum_observer_terms;
 pub use algorithms::regressor::{
     inertial_parameters, joint_torque_regressor, with_inertial_parameters, PARAMETERS_PER_BODY,
 };
-pub use algorithms::rnea::{
-    bias_and_gravity, gravity_torque, mass_matrix_and_bias, nonlinear_effects, rnea,
-    rnea_with_tip_wrench,
-};
+pub use algorithms::rnea::{gravity_torque, nonlinear_effects, rnea, rnea_with_tip_wrench};
 pub use data::Data;
 pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use identification::{

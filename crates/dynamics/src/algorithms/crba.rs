@@ -311,9 +311,11 @@ mod avx512 {
 }
 
 /// The CRBA one column at a time through the composite bodies (`data.composite`), on
-/// `data.joint_placements` as they are: the simulator's plant (`mass_matrix_and_bias`) keeps
-/// this pass, whose rounding its published runs were computed with; [`crba`] is the faster
+/// `data.joint_placements` as they are: the pass the plant's `mass_matrix_and_bias` runs
+/// interleaved with the bias (its published runs were computed with this rounding), kept
+/// whole as the reference of that interleaving's bit-for-bit test. [`crba`] is the faster
 /// pass above, equal to it within 1e-12 of the largest entry.
+#[cfg(test)]
 pub(crate) fn crba_pass_composite(model: &Model, data: &mut Data) {
     let n = model.nq();
     data.composite.copy_from_slice(&model.bodies);

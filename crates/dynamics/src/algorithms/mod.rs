@@ -6,6 +6,7 @@ pub mod crba;
 pub mod energy;
 pub mod jacobian;
 pub mod kinematics;
+pub mod mass_and_bias;
 pub mod momentum;
 pub mod regressor;
 pub mod rnea;

@@ -57,59 +57,9 @@ pub fn gravity_torque<'d>(
     Ok(&data.gravity_torque)
 }
 
-/// `M(q)`, `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
-/// `data.mass_matrix`, `data.nonlinear_effects` and `data.gravity_torque`: the values of
-/// [`crate::crba`] (within rounding: the composite-body pass), [`nonlinear_effects`] and
-/// [`gravity_torque`] called one after the other, with the joint placements computed once
-/// instead of three times. What a forward-dynamics step with an implicit solve needs.
-pub fn mass_matrix_and_bias(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    gravity: bool,
-) -> Result<(), DimensionError> {
-    let n = model.nq();
-    check_len("q", q, n)?;
-    check_len("v", v, n)?;
-    update_joint_placements(model, data, q);
-    crate::algorithms::crba::crba_pass_composite(model, data);
-    bias_at_placements(model, data, v, gravity);
-    Ok(())
-}
-
-/// `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
-/// `data.nonlinear_effects` and `data.gravity_torque`: [`mass_matrix_and_bias`] without the
-/// mass matrix, the same values bit for bit (the same passes on the same placements). For a
-/// step that holds `M` from an earlier configuration (the plant's `hold_mass_matrix`).
-pub fn bias_and_gravity(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    gravity: bool,
-) -> Result<(), DimensionError> {
-    let n = model.nq();
-    check_len("q", q, n)?;
-    check_len("v", v, n)?;
-    update_joint_placements(model, data, q);
-    bias_at_placements(model, data, v, gravity);
-    Ok(())
-}
-
-/// `C(q, v) v + G(q)` (and `G(q)` when `gravity`) on `data.joint_placements` as they are.
-#[inline(always)]
-fn bias_at_placements(model: &Model, data: &mut Data, v: &[f64], gravity: bool) {
-    rnea_pass_at_placements(model, data, Some(v), None, None);
-    data.nonlinear_effects.copy_from(&data.tau);
-    if gravity {
-        gravity_pass(model, data);
-    }
-}
-
 /// `G(q)` on `data.joint_placements` as they are.
 #[inline(always)]
-fn gravity_pass(model: &Model, data: &mut Data) {
+pub(crate) fn gravity_pass(model: &Model, data: &mut Data) {
     let n = model.nq();
     // With v = 0 and a = 0 every body acceleration is the (linear) gravity acceleration
     // seen in the body frame, and each body wrench is its weight.
@@ -186,7 +136,7 @@ fn rnea_pass(
 
 /// [`rnea_pass`] on `data.joint_placements` as they are.
 #[inline(always)]
-fn rnea_pass_at_placements(
+pub(crate) fn rnea_pass_at_placements(
     model: &Model,
     data: &mut Data,
     v: Option<&[f64]>,

@@ -153,14 +153,12 @@ impl ImplicitSolver {
         }
 
         dv[..n].fill(0.0);
-        let mut gnorm2 = residual(
+        let mut gnorm2 = residual_at_zero(
             n,
-            a,
             v,
             h,
             r,
             phi,
-            dv,
             &mut self.g,
             &mut self.slope,
             &mut self.torque,
@@ -271,6 +269,36 @@ fn residual(
     norm2
 }
 
+/// [`residual`] at `dv = 0` without the product `A dv`. For a finite `A` that sum is `+0`
+/// (the terms are signed zeros added to `+0`), so `0.0 + h (phi(v + 0.0) - r)` is the same
+/// value bit for bit (`v + 0.0` too: it turns `-0` into `+0` as `v + dv` does); a non-finite
+/// `A` fails the factorisation that follows either way.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn residual_at_zero(
+    n: usize,
+    v: &[f64],
+    h: f64,
+    r: &[f64],
+    phi: &[Friction],
+    g: &mut [f64],
+    slope: &mut [f64],
+    torque: &mut [f64],
+) -> f64 {
+    let (v, r, phi) = (&v[..n], &r[..n], &phi[..n]);
+    let (g, slope, torque) = (&mut g[..n], &mut slope[..n], &mut torque[..n]);
+    let mut norm2 = 0.0;
+    for i in 0..n {
+        let (f, df) = phi[i].torque_and_slope(v[i] + 0.0);
+        let gi = 0.0 + h * (f - r[i]);
+        g[i] = gi;
+        slope[i] = df;
+        torque[i] = f;
+        norm2 += gi * gi;
+    }
+    norm2
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -299,6 +327,59 @@ mod tests {
             v += dv[0];
         }
         assert!(v.abs() < 1e-6, "{v}");
+    }
+
+    /// The residual at zero without `A dv` equals the full one bit for bit, signed zeros
+    /// included.
+    #[test]
+    fn residual_at_zero_equals_the_full_residual() {
+        let n = 3;
+        let a = [2.0, -0.5, 0.1, -0.5, 1.0, -0.2, 0.1, -0.2, 0.7];
+        let phi = [
+            Friction {
+                viscous: 0.3,
+                coulomb: 0.1,
+                v_s: 0.01,
+            },
+            Friction::NONE,
+            Friction {
+                viscous: 0.0,
+                coulomb: 2.0,
+                v_s: 0.05,
+            },
+        ];
+        for (v, r) in [
+            ([0.3, -0.2, 0.004], [1.0, -2.0, 0.5]),
+            ([0.0, -0.0, 0.0], [0.0, -0.0, -0.0]),
+            ([-0.0, 0.0, -0.0], [-0.0, 0.0, 0.0]),
+        ] {
+            let mut full = ([0.0; 3], [0.0; 3], [0.0; 3]);
+            let mut zero = ([0.0; 3], [0.0; 3], [0.0; 3]);
+            let n_full = residual(
+                n,
+                &a,
+                &v,
+                2e-4,
+                &r,
+                &phi,
+                &[0.0; 3],
+                &mut full.0,
+                &mut full.1,
+                &mut full.2,
+            );
+            let n_zero =
+                residual_at_zero(n, &v, 2e-4, &r, &phi, &mut zero.0, &mut zero.1, &mut zero.2);
+            assert_eq!(n_full.to_bits(), n_zero.to_bits());
+            for i in 0..n {
+                assert_eq!(
+                    full.0[i].to_bits(),
+                    zero.0[i].to_bits(),
+                    "g[{i}] at v {v:?}"
+                );
+                assert_eq!(full.1[i].to_bits(), zero.1[i].to_bits());
+                assert_eq!(full.2[i].to_bits(), zero.2[i].to_bits());
+            }
+        }
     }
 
     #[test]
