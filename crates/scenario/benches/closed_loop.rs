@@ -6,6 +6,8 @@
 //!   scenario's rate, metrics and the recorded series), for `SIM_SECONDS` simulated
 //!   seconds with the metrics window starting half-way.
 //! * `closed_loop/nn_compensated_2khz`: the same at a 2 kHz plant rate.
+//! * `closed_loop/nn_compensated_fast_plant`: the same at 5 kHz with the plant's two
+//!   approximations for speed on ([`FAST_PLANT`]; their accuracy: docs/benchmarks.md).
 //! * `closed_loop_parts/*`: a bare loop of sensors, `ClosedLoop` (its controller) and plant
 //!   built from the same resolved scenario, timing each part (printed as shares of the loop).
 //!
@@ -25,6 +27,12 @@ use criterion::{criterion_group, criterion_main, Criterion};
 /// Simulated seconds per iteration.
 const SIM_SECONDS: f64 = 2.0;
 const VARIANT: &str = "nn_compensated";
+/// The plant settings of `closed_loop/nn_compensated_fast_plant`: the friction linearised at
+/// each plant step's start, the mass matrix held over the control period.
+const FAST_PLANT: [&str; 2] = [
+    "plant.friction_solve=linearized",
+    "plant.hold_mass_matrix=true",
+];
 
 /// `scenarios/deadzone.toml`, or the file named by `ADMITTANCE_BENCH_SCENARIO` (to time two
 /// builds on the same scenario text while the file changes).
@@ -81,6 +89,10 @@ fn closed_loop(c: &mut Criterion) {
         (
             format!("{VARIANT}_2khz"),
             vec!["plant.rate_hz=2000.0".to_string()],
+        ),
+        (
+            format!("{VARIANT}_fast_plant"),
+            FAST_PLANT.iter().map(|s| s.to_string()).collect(),
         ),
     ] {
         let extra: Vec<&str> = extra.iter().map(String::as_str).collect();

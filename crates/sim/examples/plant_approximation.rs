@@ -1,5 +1,5 @@
-//! Accuracy of the plant's speed approximations (`hold_mass_matrix`, `newton_tolerance`,
-//! or a coarser `rate_hz`) against the exact plant, on experiment A's plant
+//! Accuracy of the plant's speed approximations (`friction_solve`, `hold_mass_matrix`,
+//! `newton_tolerance`, or a coarser `rate_hz`) against the exact plant, on experiment A's plant
 //! (scenarios/deadzone.toml: friction, the s0 deadzone, the s1 spring) and desired motion,
 //! with no sensor noise or quantisation in the way (those make the full closed loop's
 //! rounding differences grow, docs/benchmarks.md "Closed loop"):
@@ -12,13 +12,13 @@
 //!
 //! Usage: cargo run --release -p admittance-sim --example plant_approximation --
 //!        [--set KEY=VALUE]... [--seconds S]
-//! where KEY is `hold_mass_matrix`, `newton_tolerance` or `rate_hz`, e.g.
-//! `--set hold_mass_matrix=true --set newton_tolerance=1e-6`.
+//! where KEY is `friction_solve`, `hold_mass_matrix`, `newton_tolerance` or `rate_hz`,
+//! e.g. `--set friction_solve=linearized --set hold_mass_matrix=true`.
 
 use std::path::Path;
 
 use admittance_dynamics::Model;
-use admittance_sim::{Plant, PlantConfig};
+use admittance_sim::{FrictionSolve, Plant, PlantConfig};
 
 const KP: [f64; 7] = [240.0, 360.0, 180.0, 120.0, 24.0, 24.0, 2.4];
 const KD: [f64; 7] = [20.0, 30.0, 15.0, 10.0, 2.0, 2.0, 0.2];
@@ -82,6 +82,13 @@ fn main() {
                 match key {
                     "hold_mass_matrix" => approx.hold_mass_matrix = value.parse().expect("bool"),
                     "newton_tolerance" => approx.newton_tolerance = value.parse().expect("f64"),
+                    "friction_solve" => {
+                        approx.friction_solve = match value {
+                            "newton" => FrictionSolve::Newton,
+                            "linearized" => FrictionSolve::Linearized,
+                            other => panic!("friction_solve: newton or linearized, not {other}"),
+                        }
+                    }
                     "rate_hz" => approx.rate_hz = value.parse().expect("f64"),
                     _ => panic!("unknown key {key}"),
                 }

@@ -46,7 +46,8 @@ pub use environment::{
 pub use integrator::Integrator;
 pub use plant::actuator::{clamp_effort, Deadzone};
 pub use plant::config::{
-    DeadzoneConfig, FrictionConfig, PayloadConfig, PlantConfig, Solver, SpringConfig, SpringModel,
+    DeadzoneConfig, FrictionConfig, FrictionSolve, PayloadConfig, PlantConfig, Solver,
+    SpringConfig, SpringModel,
 };
 pub use plant::error::SimError;
 pub use plant::friction::Friction;

@@ -109,15 +109,20 @@ fn everything(integrator: Integrator, solver: Solver) -> PlantConfig {
 #[test]
 fn plant_step_and_sensor_sample_do_not_allocate() {
     let model = baxter();
-    let speed_settings = [(false, 1e-12), (true, 1e-6)];
+    let speed_settings = [
+        (false, 1e-12, FrictionSolve::Newton),
+        (true, 1e-6, FrictionSolve::Newton),
+        (true, 1e-12, FrictionSolve::Linearized),
+    ];
     for integrator in INTEGRATORS {
-        for (solver, (hold, tol)) in [Solver::Auto, Solver::Cholesky]
+        for (solver, (hold, tol, friction_solve)) in [Solver::Auto, Solver::Cholesky]
             .into_iter()
             .flat_map(|s| speed_settings.map(|h| (s, h)))
         {
             let mut cfg = everything(integrator, solver);
             cfg.hold_mass_matrix = hold;
             cfg.newton_tolerance = tol;
+            cfg.friction_solve = friction_solve;
             let mut plant = Plant::new(&model, &cfg).unwrap();
             let mut sensors = Sensors::new(&model, &cfg.sensors, cfg.control_rate_hz).unwrap();
             // The robot program's gates screen the readings (the spikes are refused there).

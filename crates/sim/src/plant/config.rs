@@ -8,8 +8,9 @@
 //! integrator = "rk4_split"          # or "semi_implicit_euler"
 //! inertia_scale = 1.2               # the true arm is 20 % heavier than the nominal one
 //! effort_limit_scale = 1.0
-//! hold_mass_matrix = false          # approximations for speed, off by default
-//! newton_tolerance = 1e-12          # (accuracy: docs/benchmarks.md, "Closed loop")
+//! friction_solve = "newton"        # approximations for speed, off by default
+//! hold_mass_matrix = false          # (accuracy: docs/benchmarks.md, "Closed loop")
+//! newton_tolerance = 1e-12
 //! initial_q = [0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5]
 //!
 //! [[friction]]
@@ -104,6 +105,9 @@ pub struct PlantConfig {
     /// about the square of the last step): an approximation for speed, measured in
     /// docs/benchmarks.md ("Closed loop").
     pub newton_tolerance: f64,
+    /// How the implicit friction update is solved. Default [`FrictionSolve::Newton`] (the
+    /// exact plant); [`FrictionSolve::Linearized`] is an approximation for speed.
+    pub friction_solve: FrictionSolve,
 }
 
 impl Default for PlantConfig {
@@ -127,6 +131,34 @@ impl Default for PlantConfig {
             initial_qdot: Vec::new(),
             hold_mass_matrix: false,
             newton_tolerance: crate::plant::implicit::DEFAULT_STEP_TOLERANCE,
+            friction_solve: FrictionSolve::default(),
+        }
+    }
+}
+
+/// How the plant solves its implicit friction update `A dv + h phi(v + dv) = h r`
+/// (crates/sim/src/plant/implicit.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionSolve {
+    /// Newton's method until a step is below `newton_tolerance` (about 2.5 iterations per
+    /// step in experiment A): the exact plant.
+    #[default]
+    Newton,
+    /// One Newton step from the step's starting velocity, with its line search: the
+    /// friction linearised at the start of each plant step (a linearly implicit update, as
+    /// MuJoCo's implicit integrators treat velocity-dependent forces). One matrix
+    /// factorisation per solve instead of two or three; its accuracy against the exact
+    /// plant and its speed are in docs/benchmarks.md ("Closed loop").
+    Linearized,
+}
+
+impl FrictionSolve {
+    /// The Newton iterations the solve may take.
+    pub(crate) fn max_iterations(self) -> u32 {
+        match self {
+            FrictionSolve::Newton => crate::plant::implicit::MAX_ITERATIONS,
+            FrictionSolve::Linearized => 1,
         }
     }
 }

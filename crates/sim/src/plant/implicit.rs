@@ -27,7 +27,7 @@ use crate::plant::friction::Friction;
 use crate::plant::linalg::SpdSystem;
 
 /// Newton iteration cap; the line search makes every iteration decrease `|g|`.
-const MAX_ITERATIONS: u32 = 60;
+pub(crate) const MAX_ITERATIONS: u32 = 60;
 /// Halvings tried by the line search before giving up (the current iterate is then
 /// accurate to rounding).
 const MAX_HALVINGS: u32 = 60;
@@ -63,6 +63,8 @@ pub(crate) struct ImplicitSolver {
     trial: Vec<f64>,
     /// Newton stops once a step is at most this times the velocity scale.
     step_tolerance: f64,
+    /// Newton stops after this many iterations (1: the linearised update).
+    max_iterations: u32,
 }
 
 impl ImplicitSolver {
@@ -80,7 +82,13 @@ impl ImplicitSolver {
             delta: vec![0.0; n],
             trial: vec![0.0; n],
             step_tolerance: DEFAULT_STEP_TOLERANCE,
+            max_iterations: MAX_ITERATIONS,
         }
+    }
+
+    /// At most `count` (>= 1) Newton iterations per solve (the plant's `friction_solve`).
+    pub(crate) fn set_max_iterations(&mut self, count: u32) {
+        self.max_iterations = count.clamp(1, MAX_ITERATIONS);
     }
 
     /// Newton stops once a step is at most `tol` times the velocity scale (the plant's
@@ -165,7 +173,7 @@ impl ImplicitSolver {
         );
         let g0 = gnorm2.sqrt();
         let mut iterations = 0;
-        while iterations < MAX_ITERATIONS {
+        while iterations < self.max_iterations {
             iterations += 1;
             // Newton direction: (A + h diag phi') delta = -g.
             let m = self.sys.matrix_mut();

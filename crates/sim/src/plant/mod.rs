@@ -255,6 +255,8 @@ impl Plant {
             implicit: ImplicitSolver::new(n),
         };
         dynx.implicit.set_step_tolerance(config.newton_tolerance);
+        dynx.implicit
+            .set_max_iterations(config.friction_solve.max_iterations());
         let vec4 = || [vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         Ok(Self {
             dynx,
