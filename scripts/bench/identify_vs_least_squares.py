@@ -308,6 +308,36 @@ def check_regressor(m, pmodel, data, label):
         raise SystemExit(f"{label}: Pinocchio's regressor and the project's RNEA differ by {np.abs(pin_tau - ours).max():.3g} N m")
 
 
+def timing(names, cfg, log, repeats=3):
+    """`adm.identify` on `cfg.training_duration` s at 1 kHz of motion that does not repeat (an
+    excitation whose period is the whole recording, so the delay scan and the spring trials
+    run, as on a real recording), the cut-off chosen (`None`) and given (4 Hz): the fastest of
+    `repeats` calls each."""
+    from admittance.mujoco import _arms
+    from admittance.mujoco._plant import MujocoArm
+
+    for name in names:
+        rel, base, tip = _arms.ARMS[name]
+        path = _arms.robots_dir() / rel
+        m = adm.Model.from_urdf(str(path), base=base, tip=tip)
+        arm = MujocoArm(path.read_text(), m.joint_names, tip or m.tip_link, m.effort_limit, cfg.dt, cfg.friction_scale)
+        duration = cfg.training_duration
+        e = adm.excitation(m, duration, seed=cfg.training_seed, rate_hz=1.0 / cfg.dt, period=duration, **_arms.WHOLE_RANGE)
+        motion = {k: np.asarray(e[k]) for k in ("t", "q", "qdot", "qddot")}
+        gains = _arms.recording_gains(m, motion["q"].mean(axis=0), arm.terms)
+        train, _, _ = _arms.record(arm, m, motion, gains, cfg, np.random.default_rng(cfg.seed))
+        for hz in (None, 4.0):
+            seconds = []
+            for _ in range(repeats):
+                start = time.perf_counter()
+                ident = adm.identify(train, m, input_filter_hz=hz)
+                seconds.append(time.perf_counter() - start)
+            chosen = ident.summary["input_filter_hz"]
+            log(f"{name} ({m.n} joints, {len(train['t'])} samples): identify, cut-off "
+                f"{'chosen' if hz is None else 'given'} ({chosen:g} Hz): {min(seconds):.2f} s "
+                f"(runs {', '.join(f'{x:.2f}' for x in seconds)}; bar < 2 s)")
+
+
 def main():
     from admittance.mujoco import _arms
 
@@ -329,11 +359,20 @@ def main():
         default=1.0,
         help="multiply every recorded torque by this (a torque constant or gear ratio off against the URDF)",
     )
+    parser.add_argument(
+        "--timing",
+        action="store_true",
+        help="only time identify on non-repeating recordings of --arms (60 s at 1 kHz by default)",
+    )
     args = parser.parse_args()
     cfg = _arms.ArmsConfig(training_duration=args.training_duration, evaluation_duration=args.evaluation_duration)
 
     def log(text):
         print(text, flush=True)
+
+    if args.timing:
+        timing(args.arms, cfg, log)
+        return
 
     log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
     points = [] if args.no_baxter else baxter(log, args.torque_scale)

@@ -199,10 +199,9 @@ pub fn identify_recording(
             settings.ridge_tolerance = REPEAT_RIDGE_TOLERANCE;
         }
     }
-    let mut best: Option<(f64, Identification)> = None;
-    let mut tried = Vec::new();
-    let mut last_error = String::new();
-    for cutoff in candidates {
+    // The candidates are independent fits: on as many threads as there are cores, then
+    // judged in their order (the same choice and values as one after the other).
+    let fit_at = |cutoff: f64| -> Result<Result<Identification, String>, String> {
         let conditioned = ConditionedSamples::new(train, cutoff)
             .map_err(|e| format!("input filter {cutoff} Hz: {e}"))?;
         let samples = conditioned.samples().slice(0, rows.min(train.len()));
@@ -213,19 +212,27 @@ pub fn identify_recording(
             ),
             None => None,
         };
-        let fitted = identify(
+        Ok(identify(
             arm,
             &samples,
             held.as_ref().map(|h| h.samples()).as_ref(),
             &settings,
-        );
+        )
+        .map_err(|e| e.to_string()))
+    };
+    let fits = in_parallel(&candidates, fit_at);
+    let mut best: Option<(f64, Identification)> = None;
+    let mut tried = Vec::new();
+    let mut last_error = String::new();
+    for (cutoff, fitted) in candidates.into_iter().zip(fits) {
+        let fitted = fitted?;
         let mut ident = match fitted {
             Ok(i) => i,
             Err(e) if input_filter_hz.is_none() => {
-                last_error = e.to_string();
+                last_error = e;
                 continue;
             }
-            Err(e) => return Err(e.to_string()),
+            Err(e) => return Err(e),
         };
         let e = &ident.summary.expected_false_torque_rms;
         let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64).sqrt();
@@ -258,4 +265,34 @@ pub fn identify_recording(
         Some((_, ident)) => Ok((ident, tried)),
         None => Err(last_error),
     }
+}
+
+/// `f` of every item, in order, on up to as many threads as the machine has cores.
+fn in_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(T) -> R + Sync) -> Vec<R>
+where
+    T: Copy,
+{
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .min(items.len());
+    if threads <= 1 {
+        return items.iter().map(|&x| f(x)).collect();
+    }
+    let chunk = items.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .chunks(chunk)
+            .map(|part| {
+                let f = &f;
+                scope.spawn(move || part.iter().map(|&x| f(x)).collect::<Vec<R>>())
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| match h.join() {
+                Ok(results) => results,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    })
 }

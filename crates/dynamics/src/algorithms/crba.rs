@@ -310,44 +310,16 @@ mod avx512 {
     }
 }
 
-/// The CRBA one column at a time through the composite bodies (`data.composite`), on
-/// `data.joint_placements` as they are: the pass the plant's `mass_matrix_and_bias` runs
-/// interleaved with the bias (its published runs were computed with this rounding), kept
-/// whole as the reference of that interleaving's bit-for-bit test. [`crba`] is the faster
-/// pass above, equal to it within 1e-12 of the largest entry.
 #[cfg(test)]
-pub(crate) fn crba_pass_composite(model: &Model, data: &mut Data) {
-    let n = model.nq();
-    data.composite.copy_from_slice(&model.bodies);
-    let m = data.mass_matrix.as_mut_slice();
-    for i in (0..n).rev() {
-        // Column i: the wrench needed to accelerate the composite body i..n at unit qddot_i,
-        // carried back through the ancestors.
-        let joint = &model.joints[i];
-        let mut f = data.composite[i].mul_motion(&joint.motion_subspace());
-        m[i * n + i] = joint.subspace_dot(&f);
-        for j in (0..i).rev() {
-            f = data.joint_placements[j + 1].act_force(&f);
-            let value = model.joints[j].subspace_dot(&f);
-            m[i * n + j] = value;
-            m[j * n + i] = value;
-        }
-        if i > 0 {
-            let moved = data.composite[i].transformed(&data.joint_placements[i]);
-            data.composite[i - 1] = data.composite[i - 1].add(&moved);
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::algorithms::update_joint_placements;
     use crate::spatial::Inertia;
 
     /// The CRBA before the lanes (one 6-vector transform per entry, `Joint::transform`
-    /// placements): the reference the fast path must equal to rounding.
-    fn reference(model: &Model, q: &[f64]) -> DMatrix<f64> {
+    /// placements): the reference the fast path must equal to rounding, and the plant's
+    /// `mass_matrix_and_bias` bit for bit.
+    pub(crate) fn reference(model: &Model, q: &[f64]) -> DMatrix<f64> {
         let n = model.nq();
         let mut data = Data::new(model);
         update_joint_placements(model, &mut data, q);

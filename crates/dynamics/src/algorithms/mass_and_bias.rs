@@ -16,6 +16,7 @@
 
 use nalgebra::Vector3;
 
+use crate::algorithms::rnea::forward_step;
 use crate::algorithms::update_joint_placements;
 use crate::data::Data;
 use crate::error::{check_len, DimensionError};
@@ -34,16 +35,7 @@ pub fn mass_matrix_and_bias(
     v: &[f64],
     gravity: bool,
 ) -> Result<(), DimensionError> {
-    let n = model.nq();
-    check_len("q", q, n)?;
-    check_len("v", v, n)?;
-    update_joint_placements(model, data, q);
-    if gravity {
-        interleaved::<true, true>(model, data, v);
-    } else {
-        interleaved::<true, false>(model, data, v);
-    }
-    Ok(())
+    at_configuration::<true>(model, data, q, v, gravity)
 }
 
 /// `C(q, v) v + G(q)` and, when `gravity`, `G(q)` at one configuration, into
@@ -57,22 +49,34 @@ pub fn bias_and_gravity(
     v: &[f64],
     gravity: bool,
 ) -> Result<(), DimensionError> {
+    at_configuration::<false>(model, data, q, v, gravity)
+}
+
+/// The two functions above: checks, placements, then the recursions.
+fn at_configuration<const MATRIX: bool>(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    gravity: bool,
+) -> Result<(), DimensionError> {
     let n = model.nq();
     check_len("q", q, n)?;
     check_len("v", v, n)?;
     update_joint_placements(model, data, q);
     if gravity {
-        interleaved::<false, true>(model, data, v);
+        interleaved::<MATRIX, true>(model, data, v);
     } else {
-        interleaved::<false, false>(model, data, v);
+        interleaved::<MATRIX, false>(model, data, v);
     }
     Ok(())
 }
 
 /// The recursions of the module doc on `data.joint_placements` as they are: the RNEA always,
 /// the composite CRBA when `MATRIX`, the gravity pass when `GRAVITY`. Each recursion's
-/// expressions are those of its own pass (`rnea_pass_at_placements` with zero acceleration,
-/// `crba_pass_composite`, `gravity_pass`), written out again here so that they interleave.
+/// expressions are those of its own pass (the RNEA's `forward_step` with zero acceleration,
+/// the composite-body CRBA the plant used before the lanes, `gravity_pass`), the last two
+/// written out again here so that they interleave.
 #[inline(always)]
 fn interleaved<const MATRIX: bool, const GRAVITY: bool>(model: &Model, data: &mut Data, v: &[f64]) {
     let n = model.nq();
@@ -83,21 +87,12 @@ fn interleaved<const MATRIX: bool, const GRAVITY: bool>(model: &Model, data: &mu
     };
     let mut gravity_acceleration = -model.gravity;
     for i in 0..n {
-        let joint = &model.joints[i];
-        let x = &data.joint_placements[i];
-        let inertia = &model.bodies[i];
-        let s = joint.motion_subspace();
-        let joint_velocity = s.scaled(v[i]);
-        let vi = x.act_inv_motion(&v_parent) + joint_velocity;
-        let ai = x.act_inv_motion(&a_parent) + s.scaled(0.0) + vi.cross_motion(&joint_velocity);
-        let fi = inertia.mul_motion(&ai) + vi.cross_force(&inertia.mul_motion(&vi));
-        data.velocities[i] = vi;
-        data.accelerations[i] = ai;
-        data.forces[i] = fi;
+        let (vi, ai) = forward_step(model, data, i, (&v_parent, &a_parent), v[i], 0.0);
         v_parent = vi;
         a_parent = ai;
         if GRAVITY {
             // v = 0 and a = 0: each body's acceleration is gravity seen in its frame.
+            let (x, inertia) = (&data.joint_placements[i], &model.bodies[i]);
             gravity_acceleration = x.rotation.tr_mul(&gravity_acceleration);
             data.gravity_forces[i] = Force {
                 linear: gravity_acceleration * inertia.mass,
@@ -147,7 +142,7 @@ fn interleaved<const MATRIX: bool, const GRAVITY: bool>(model: &Model, data: &mu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::algorithms::crba::crba_pass_composite;
+    use crate::algorithms::crba::tests::reference as crba_reference;
     use crate::algorithms::rnea::{gravity_pass, rnea_pass_at_placements};
 
     fn model(relative: &str) -> Model {
@@ -186,7 +181,7 @@ mod tests {
                     for matrix in [false, true] {
                         update_joint_placements(&model, &mut reference, &q);
                         if matrix {
-                            crba_pass_composite(&model, &mut reference);
+                            reference.mass_matrix = crba_reference(&model, &q);
                             mass_matrix_and_bias(&model, &mut fused, &q, &v, gravity).unwrap();
                         } else {
                             bias_and_gravity(&model, &mut fused, &q, &v, gravity).unwrap();

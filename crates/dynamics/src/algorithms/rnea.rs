@@ -134,6 +134,32 @@ fn rnea_pass(
     rnea_pass_at_placements(model, data, v, a, wrench);
 }
 
+/// Body `i`'s velocity and acceleration from its parent's and the joint's rate and
+/// acceleration, and the wrench that moves it (into `data.velocities`, `data.accelerations`
+/// and `data.forces`): one step of the RNEA's forward recursion. Returns the velocity and
+/// acceleration, the next body's parent motion.
+#[inline(always)]
+pub(crate) fn forward_step(
+    model: &Model,
+    data: &mut Data,
+    i: usize,
+    (v_parent, a_parent): (&Motion, &Motion),
+    qd: f64,
+    qdd: f64,
+) -> (Motion, Motion) {
+    let x = &data.joint_placements[i];
+    let s = model.joints[i].motion_subspace();
+    let joint_velocity = s.scaled(qd);
+    let vi = x.act_inv_motion(v_parent) + joint_velocity;
+    let ai = x.act_inv_motion(a_parent) + s.scaled(qdd) + vi.cross_motion(&joint_velocity);
+    let inertia = &model.bodies[i];
+    let fi = inertia.mul_motion(&ai) + vi.cross_force(&inertia.mul_motion(&vi));
+    data.velocities[i] = vi;
+    data.accelerations[i] = ai;
+    data.forces[i] = fi;
+    (vi, ai)
+}
+
 /// [`rnea_pass`] on `data.joint_placements` as they are.
 #[inline(always)]
 pub(crate) fn rnea_pass_at_placements(
@@ -150,19 +176,9 @@ pub(crate) fn rnea_pass_at_placements(
         angular: Vector3::zeros(),
     };
     for i in 0..n {
-        let joint = &model.joints[i];
-        let x = &data.joint_placements[i];
-        let s = joint.motion_subspace();
         let qd = v.map_or(0.0, |v| v[i]);
         let qdd = a.map_or(0.0, |a| a[i]);
-        let joint_velocity = s.scaled(qd);
-        let vi = x.act_inv_motion(&v_parent) + joint_velocity;
-        let ai = x.act_inv_motion(&a_parent) + s.scaled(qdd) + vi.cross_motion(&joint_velocity);
-        let inertia = &model.bodies[i];
-        let fi = inertia.mul_motion(&ai) + vi.cross_force(&inertia.mul_motion(&vi));
-        data.velocities[i] = vi;
-        data.accelerations[i] = ai;
-        data.forces[i] = fi;
+        let (vi, ai) = forward_step(model, data, i, (&v_parent, &a_parent), qd, qdd);
         v_parent = vi;
         a_parent = ai;
     }

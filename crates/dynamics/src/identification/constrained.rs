@@ -16,6 +16,7 @@
 use nalgebra::{DMatrix, DVector, Matrix4};
 
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
+use crate::identification::cholesky::cholesky;
 use crate::identification::consistency::{margin, project, pseudo_inertia_of};
 use crate::identification::joint_terms::JOINT_FEATURES;
 use crate::identification::normal::{reduced_system, Normal};
@@ -258,7 +259,7 @@ fn minimise(
     prior: &[f64],
     yy: f64,
 ) -> Option<DVector<f64>> {
-    let free = a.clone().cholesky()?.solve(c);
+    let free = cholesky(a.clone())?.solve(c);
     let f = |x: &DVector<f64>| x.dot(&(a * x)) - 2.0 * c.dot(x);
     // Already possible (strictly inside): the unconstrained minimum is the minimum.
     if set.barrier(&free).is_some() {
@@ -287,7 +288,7 @@ fn minimise(
             let mut grad = (&ax - c) * (2.0 * t);
             let mut hess = a * (2.0 * t);
             set.add_derivatives(&x, &mut grad, &mut hess)?;
-            let Some(chol) = hess.cholesky() else { break };
+            let Some(chol) = cholesky(hess) else { break };
             let d = -chol.solve(&grad);
             let decrement = -grad.dot(&d);
             if !(decrement > 1e-9) {

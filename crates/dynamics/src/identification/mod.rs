@@ -15,6 +15,7 @@
 //! ```
 
 mod base;
+mod cholesky;
 mod consistency;
 mod constrained;
 mod excitation;

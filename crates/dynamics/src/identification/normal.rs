@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::algorithms::regressor::{joint_torque_regressor, PARAMETERS_PER_BODY};
 use crate::data::Data;
 use crate::error::DynamicsError;
+use crate::identification::cholesky::cholesky;
 use crate::identification::joint_terms::{features, JOINT_FEATURES};
 use crate::identification::samples::Samples;
 use crate::model::Model;
@@ -106,7 +107,7 @@ pub(crate) fn solve(
     ridge: f64,
 ) -> Option<DVector<f64>> {
     let (a, rhs, idx) = reduced_system(normal, active, prior, ridge);
-    let sol = a.cholesky()?.solve(&rhs);
+    let sol = cholesky(a)?.solve(&rhs);
     let mut x = prior.clone();
     for (r, &c) in idx.iter().enumerate() {
         x[c] = sol[r];
