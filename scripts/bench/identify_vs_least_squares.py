@@ -308,11 +308,12 @@ def check_regressor(m, pmodel, data, label):
         raise SystemExit(f"{label}: Pinocchio's regressor and the project's RNEA differ by {np.abs(pin_tau - ours).max():.3g} N m")
 
 
-def timing(names, cfg, log, repeats=3):
+def timing(names, cfg, log, csv_dir=None, repeats=3):
     """`adm.identify` on `cfg.training_duration` s at 1 kHz of motion that does not repeat (an
     excitation whose period is the whole recording, so the delay scan and the spring trials
     run, as on a real recording), the cut-off chosen (`None`) and given (4 Hz): the fastest of
-    `repeats` calls each."""
+    `repeats` calls each; with `csv_dir`, each recording also written there as ARM.csv (the
+    free-motion CSV that `admittance identify --data` reads, to time the command line)."""
     from admittance.mujoco import _arms
     from admittance.mujoco._plant import MujocoArm
 
@@ -326,6 +327,12 @@ def timing(names, cfg, log, repeats=3):
         motion = {k: np.asarray(e[k]) for k in ("t", "q", "qdot", "qddot")}
         gains = _arms.recording_gains(m, motion["q"].mean(axis=0), arm.terms)
         train, _, _ = _arms.record(arm, m, motion, gains, cfg, np.random.default_rng(cfg.seed))
+        if csv_dir:
+            out = pathlib.Path(csv_dir) / f"{name}.csv"
+            header = ["t"] + [f"{kind}.{j}" for kind in ("q", "qdot", "qddot", "tau") for j in m.joint_names]
+            table = np.column_stack([train["t"]] + [np.asarray(train[kind]) for kind in ("q", "qdot", "qddot", "tau")])
+            np.savetxt(out, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+            log(f"wrote {out} (URDF: {path})")
         for hz in (None, 4.0):
             seconds = []
             for _ in range(repeats):
@@ -364,6 +371,7 @@ def main():
         action="store_true",
         help="only time identify on non-repeating recordings of --arms (60 s at 1 kHz by default)",
     )
+    parser.add_argument("--write-csv", metavar="DIR", help="with --timing: write each recording to DIR/ARM.csv")
     args = parser.parse_args()
     cfg = _arms.ArmsConfig(training_duration=args.training_duration, evaluation_duration=args.evaluation_duration)
 
@@ -371,7 +379,7 @@ def main():
         print(text, flush=True)
 
     if args.timing:
-        timing(args.arms, cfg, log)
+        timing(args.arms, cfg, log, args.write_csv)
         return
 
     log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
