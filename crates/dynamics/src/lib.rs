@@ -33,6 +33,7 @@ mod error;
 mod fingerprint;
 mod identification;
 mod model;
+mod parallel;
 pub mod spatial;
 mod urdf;
 
@@ -60,6 +61,7 @@ pub use identification::{
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,
 };
+pub use parallel::parallel_map;
 pub use spatial::{Force, Inertia, Motion, Transform};
 pub use urdf::UrdfOptions;
 

@@ -220,7 +220,7 @@ pub fn identify_recording(
         )
         .map_err(|e| e.to_string()))
     };
-    let fits = in_parallel(&candidates, fit_at);
+    let fits = admittance_dynamics::parallel_map(&candidates, |&cutoff| fit_at(cutoff));
     let mut best: Option<(f64, Identification)> = None;
     let mut tried = Vec::new();
     let mut last_error = String::new();
@@ -265,34 +265,4 @@ pub fn identify_recording(
         Some((_, ident)) => Ok((ident, tried)),
         None => Err(last_error),
     }
-}
-
-/// `f` of every item, in order, on up to as many threads as the machine has cores.
-fn in_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(T) -> R + Sync) -> Vec<R>
-where
-    T: Copy,
-{
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |t| t.get())
-        .min(items.len());
-    if threads <= 1 {
-        return items.iter().map(|&x| f(x)).collect();
-    }
-    let chunk = items.len().div_ceil(threads);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = items
-            .chunks(chunk)
-            .map(|part| {
-                let f = &f;
-                scope.spawn(move || part.iter().map(|&x| f(x)).collect::<Vec<R>>())
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| match h.join() {
-                Ok(results) => results,
-                Err(panic) => std::panic::resume_unwind(panic),
-            })
-            .collect()
-    })
 }

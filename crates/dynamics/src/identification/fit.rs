@@ -7,9 +7,7 @@ use nalgebra::DVector;
 use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
 use crate::error::DynamicsError;
 use crate::identification::base::BaseParameters;
-use crate::identification::held_out::{
-    best_of, errors_by_gain, parallel_map, Fitter, Held, Signals,
-};
+use crate::identification::held_out::{best_of, errors_by_gain, Fitter, Held, Signals};
 use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
 use crate::identification::normal::{accumulate, columns, solve, JointSums, Normal, NormalParts};
 use crate::identification::prior_scale::{prior_scale, scaled};
@@ -19,6 +17,7 @@ use crate::identification::settings::IdentificationSettings;
 use crate::identification::springs::{choose_springs, joint_column, Choice};
 use crate::identification::{Identification, IdentificationSummary};
 use crate::model::Model;
+use crate::parallel::parallel_map;
 
 /// Ridge weights tried first when none is given: 1e-8 to 1e2, a decade apart (the best is
 /// then refined half a decade either side).

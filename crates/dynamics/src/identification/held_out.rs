@@ -9,31 +9,7 @@ use crate::identification::constrained::solve_physical;
 use crate::identification::normal::{shifted_torque, solve, Normal, NormalParts};
 use crate::identification::samples::Samples;
 use crate::identification::Identification;
-
-/// `f` of every item, on up to as many threads as the machine has cores (the folds of a
-/// cross-validation are independent fits).
-pub(super) fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |t| t.get())
-        .min(items.len());
-    if threads <= 1 {
-        return items.iter().map(f).collect();
-    }
-    let chunk = items.len().div_ceil(threads);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = items
-            .chunks(chunk)
-            .map(|part| {
-                let f = &f;
-                scope.spawn(move || part.iter().map(f).collect::<Vec<R>>())
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_default())
-            .collect()
-    })
-}
+use crate::parallel::parallel_map;
 
 /// Where settings are scored: a separate recording, or held-out contiguous stretches; the
 /// normal equations as functions of the torque shift.
