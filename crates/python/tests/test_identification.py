@@ -64,6 +64,24 @@ def test_identify_predicts_other_motion(baxter, truth_and_data):
     assert len(ident.joint_terms) == baxter.n and "viscous" in ident.joint_terms[0]
 
 
+def test_the_chosen_cut_off_is_the_best_candidate_fitted_alone(baxter, truth_and_data):
+    """With no cut-off given, the candidates are fitted side by side on the machine's cores
+    and the one with the lowest expected false torque is kept (the first of equals): the
+    same fit, value for value, as that cut-off given alone."""
+    _, data = truth_and_data
+    chosen = adm.identify(data, baxter)
+    alone = {f: adm.identify(data, baxter, input_filter_hz=f) for f in (4.0, 6.0, 10.0, 0.0)}
+
+    def expected(ident):
+        return float(np.sqrt(np.mean(np.square(ident.summary["expected_false_torque_rms"]))))
+
+    best = min(alone, key=lambda f: expected(alone[f]))
+    assert chosen.summary["input_filter_hz"] == best
+    assert chosen.summary["expected_false_torque_rms"] == alone[best].summary["expected_false_torque_rms"]
+    _, q, qd, qdd = multisine(baxter, 7, 2.0)
+    assert np.array_equal(chosen.predict(q, qd, qdd), alone[best].predict(q, qd, qdd))
+
+
 def test_save_load_and_observers(baxter, truth_and_data, tmp_path):
     _, data = truth_and_data
     ident = adm.identify(data, baxter)
