@@ -61,6 +61,12 @@ fn algorithms(c: &mut Criterion) {
     group.bench_function("bias_and_gravity", |b| {
         b.iter(|| black_box(bias_and_gravity(&model, &mut data, black_box(&q), &v, true).is_ok()))
     });
+    // One sample's row block of the identification least squares.
+    group.bench_function("joint_torque_regressor", |b| {
+        b.iter(|| {
+            black_box(joint_torque_regressor(&model, &mut data, black_box(&q), &v, &a).is_ok())
+        })
+    });
     group.bench_function("gravity", |b| {
         b.iter(|| black_box(gravity_torque(&model, &mut data, black_box(&q)).is_ok()))
     });
