@@ -15,6 +15,7 @@ use crate::identification::recording_checks::check_against_urdf;
 use crate::identification::samples::Samples;
 use crate::identification::settings::IdentificationSettings;
 use crate::identification::springs::{choose_springs, joint_column, Choice};
+use crate::identification::urdf_torques::UrdfTorques;
 use crate::identification::{Identification, IdentificationSummary};
 use crate::model::Model;
 use crate::parallel::parallel_map;
@@ -80,9 +81,12 @@ pub fn identify(
     let n = model.nq();
     check_sizes(train, validation, settings, n)?;
     check_motion(train, "training samples")?;
-    check_against_urdf(model, train, "training samples")?;
+    // The URDF arm's torque on the training samples serves the checks and the prior's scale.
+    let urdf_train = UrdfTorques::new(model, train, true);
+    check_against_urdf(model, train, &urdf_train.total, "training samples")?;
     if let Some(v) = validation {
-        check_against_urdf(model, v, "validation samples")?;
+        let urdf_validation = UrdfTorques::new(model, v, false);
+        check_against_urdf(model, v, &urdf_validation.total, "validation samples")?;
     }
     let width = settings.coulomb_width;
     let p = columns(n);
@@ -118,7 +122,7 @@ pub fn identify(
     // arms whose torque was 1.05 times the URDF's, where the scaled prior lowered the false
     // torque on new motion by up to 19 % (docs/experiments.md).
     let urdf = prior;
-    let (prior_scale, prior) = match prior_scale(model, train, width)? {
+    let (prior_scale, prior) = match prior_scale(model, train, &urdf_train, width)? {
         Some(s) => (s, scaled(&urdf, s, n)),
         None => (1.0, urdf.clone()),
     };

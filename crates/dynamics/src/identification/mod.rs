@@ -31,6 +31,7 @@ mod recording_checks;
 mod samples;
 mod settings;
 mod springs;
+mod urdf_torques;
 
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;

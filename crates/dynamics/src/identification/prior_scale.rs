@@ -11,11 +11,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::algorithms::regressor::PARAMETERS_PER_BODY;
-use crate::algorithms::rnea::{nonlinear_effects, rnea};
-use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::identification::joint_terms::{features, JOINT_FEATURES};
 use crate::identification::samples::Samples;
+use crate::identification::urdf_torques::UrdfTorques;
 use crate::model::Model;
 
 /// Scales outside this range are not a calibration error but a wrong model or signal; the
@@ -40,6 +39,7 @@ const MIN_DEVIATION: f64 = 0.01;
 pub(super) fn prior_scale(
     model: &Model,
     samples: &Samples,
+    urdf: &UrdfTorques,
     width: f64,
 ) -> Result<Option<f64>, DynamicsError> {
     let n = model.nq();
@@ -47,10 +47,11 @@ pub(super) fn prior_scale(
     let mut gram = DMatrix::<f64>::zeros(m, m);
     let mut rhs = DVector::<f64>::zeros(m);
     let mut tau_sq = 0.0;
-    let mut data = Data::new(model);
     let mut row = vec![0.0; 2 + JOINT_FEATURES];
     let mut f = [0.0; JOINT_FEATURES];
-    let mut bias = vec![0.0; n];
+    if urdf.bias.len() != urdf.total.len() || urdf.total.len() != samples.len() * n {
+        return Ok(None);
+    }
     for k in 0..samples.len() {
         let r = k * n..(k + 1) * n;
         let (q, qd, qdd) = (
@@ -58,13 +59,7 @@ pub(super) fn prior_scale(
             &samples.qdot[r.clone()],
             &samples.qddot[r.clone()],
         );
-        let Ok(h) = nonlinear_effects(model, &mut data, q, qd) else {
-            return Ok(None);
-        };
-        bias.copy_from_slice(h.as_slice());
-        let Ok(total) = rnea(model, &mut data, q, qd, qdd) else {
-            return Ok(None);
-        };
+        let (bias, total) = (&urdf.bias[r.clone()], &urdf.total[r]);
         for i in 0..n {
             features(q[i], qd[i], qdd[i], width, &mut f);
             row[0] = bias[i];
