@@ -8,8 +8,9 @@
 //! through a strided generic loop, one earlier column per pass over column `j`, each earlier
 //! column read again from the L2 cache for every later one. Here the same update of each
 //! element in the same order, four earlier columns per pass and four later columns per read
-//! of them: the same values bit for bit (`tests::equals_nalgebra_bit_for_bit`), so every
-//! identification is unchanged.
+//! of them; with AVX-512 (checked at run time), eight rows of four later columns per
+//! register pass. The same values bit for bit (`tests::equals_nalgebra_bit_for_bit`, every
+//! kernel the CPU has), so every identification is unchanged.
 
 use nalgebra::{Cholesky, DMatrix, Dyn};
 
@@ -21,8 +22,110 @@ pub(crate) fn cholesky(mut matrix: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
         return None;
     }
     let a = matrix.as_mut_slice(); // column-major: entry (i, k) at k n + i
-                                   // Columns in blocks of four: the earlier columns' updates of a block's columns are done
-                                   // four earlier columns at a time, those four staying in the L1 cache for the block.
+                                   // The same operations compiled for wider vectors when the CPU has them: separate
+                                   // multiplies and adds either way (Rust never fuses them), so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    let factored = if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512F (checked just above).
+        unsafe { factor_avx512(a, n) }
+    } else if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        unsafe { factor_avx2(a, n) }
+    } else {
+        factor(a, n, &Portable)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let factored = factor(a, n, &Portable);
+    factored.then(|| Cholesky::pack_dirty(matrix))
+}
+
+/// [`factor`] with the AVX-512 kernel.
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn factor_avx512(a: &mut [f64], n: usize) -> bool {
+    factor(a, n, &avx512::Avx512)
+}
+
+/// [`factor`] with 256-bit vectors.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn factor_avx2(a: &mut [f64], n: usize) -> bool {
+    factor(a, n, &Portable)
+}
+
+/// The updates of the factorisation: `y = (-L_jk) x + y` of every element, the earlier
+/// columns `k` in ascending order.
+trait Kernel {
+    /// Rows `j..n` of column `j` (`column`) updated by the `count` columns `first..` of
+    /// `columns` (column-major, `n` rows each).
+    fn column(
+        &self,
+        column: &mut [f64],
+        columns: &[f64],
+        n: usize,
+        j: usize,
+        first: usize,
+        count: usize,
+    );
+
+    /// The `width` columns `start..` (`block`, from row 0) updated by the `count` columns
+    /// `first..` of `columns`, each from its diagonal down.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn block(
+        &self,
+        block: &mut [f64],
+        columns: &[f64],
+        n: usize,
+        start: usize,
+        width: usize,
+        first: usize,
+        count: usize,
+    ) {
+        for c in 0..width {
+            let j = start + c;
+            self.column(
+                &mut block[c * n + j..c * n + n],
+                columns,
+                n,
+                j,
+                first,
+                count,
+            );
+        }
+    }
+}
+
+/// The kernel in plain Rust (vectorised as far as the compiler's target allows).
+struct Portable;
+
+impl Kernel for Portable {
+    #[inline(always)]
+    fn column(
+        &self,
+        column: &mut [f64],
+        columns: &[f64],
+        n: usize,
+        j: usize,
+        first: usize,
+        count: usize,
+    ) {
+        update(column, columns, n, j, first, count)
+    }
+}
+
+/// The lower triangle of the column-major `n x n` matrix `a` replaced by its Cholesky
+/// factor, as nalgebra does it; `false` when a pivot is not positive.
+#[inline(always)]
+fn factor(a: &mut [f64], n: usize, kernel: &impl Kernel) -> bool {
+    // Columns in blocks of four: the earlier columns' updates of a block's columns are done
+    // four earlier columns at a time, those four staying in the L1 cache for the block.
     let mut start = 0;
     while start < n {
         let width = (n - start).min(BLOCK);
@@ -30,22 +133,18 @@ pub(crate) fn cholesky(mut matrix: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
         let mut k = 0;
         while k < start {
             let count = (start - k).min(BLOCK);
-            for c in 0..width {
-                let j = start + c;
-                let column = &mut block[c * n + j..c * n + n];
-                update(column, earlier, n, j, k, count);
-            }
+            kernel.block(block, earlier, n, start, width, k, count);
             k += count;
         }
         for c in 0..width {
             let j = start + c;
             let (done, rest) = block.split_at_mut(c * n);
             let column = &mut rest[j..n];
-            update(column, done, n, j, 0, c);
+            kernel.column(column, done, n, j, 0, c);
             let diag = column[0];
             // nalgebra: a zero pivot fails, and so does one without a real square root.
             if !(diag > 0.0) {
-                return None;
+                return false;
             }
             let denom = diag.sqrt();
             column[0] = denom;
@@ -55,7 +154,7 @@ pub(crate) fn cholesky(mut matrix: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
         }
         start += width;
     }
-    Some(Cholesky::pack_dirty(matrix))
+    true
 }
 
 /// Columns per block and earlier columns per pass.
@@ -93,6 +192,139 @@ fn update(column: &mut [f64], columns: &[f64], n: usize, j: usize, first: usize,
     }
 }
 
+/// The kernel in AVX-512 registers, eight rows at a time and the last few masked, four
+/// later columns at once where a block has them: the same multiplies and adds of each
+/// element in the same order.
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{Kernel, BLOCK};
+
+    /// Constructed only where the CPU has AVX-512F ([`super::factor_avx512`]).
+    pub(super) struct Avx512;
+
+    /// The lanes of rows `i..` up to `len`.
+    #[inline(always)]
+    fn mask(len: usize, i: usize) -> __mmask8 {
+        if len - i >= 8 {
+            0xff
+        } else {
+            (1u8 << (len - i)) - 1
+        }
+    }
+
+    impl Kernel for Avx512 {
+        #[inline(always)]
+        fn column(
+            &self,
+            column: &mut [f64],
+            columns: &[f64],
+            n: usize,
+            j: usize,
+            first: usize,
+            count: usize,
+        ) {
+            let len = column.len();
+            if count == 0 {
+                return;
+            }
+            // Every stretch read below lies in `columns`.
+            assert!(columns.len() >= (first + count - 1) * n + j + len);
+            // SAFETY: AVX-512F (the type's contract); reads and writes within the slices
+            // (checked above; masked lanes are not touched).
+            unsafe {
+                let y = column.as_mut_ptr();
+                let below = |k: usize| columns.as_ptr().add(k * n + j);
+                for k in first..first + count {
+                    let c = below(k);
+                    let f = _mm512_set1_pd(-*c);
+                    let mut i = 0;
+                    while i < len {
+                        let m = mask(len, i);
+                        let v = _mm512_maskz_loadu_pd(m, y.add(i));
+                        let x = _mm512_maskz_loadu_pd(m, c.add(i));
+                        _mm512_mask_storeu_pd(y.add(i), m, _mm512_add_pd(_mm512_mul_pd(f, x), v));
+                        i += 8;
+                    }
+                }
+            }
+        }
+
+        #[inline(always)]
+        fn block(
+            &self,
+            block: &mut [f64],
+            columns: &[f64],
+            n: usize,
+            start: usize,
+            width: usize,
+            first: usize,
+            count: usize,
+        ) {
+            if width != BLOCK || count != BLOCK {
+                for c in 0..width {
+                    let j = start + c;
+                    self.column(
+                        &mut block[c * n + j..c * n + n],
+                        columns,
+                        n,
+                        j,
+                        first,
+                        count,
+                    );
+                }
+                return;
+            }
+            // The triangle above row start + 4, column by column; the rows below it, which
+            // every column of the block has, four columns at once.
+            for c in 0..BLOCK {
+                let j = start + c;
+                self.column(
+                    &mut block[c * n + j..c * n + start + BLOCK],
+                    columns,
+                    n,
+                    j,
+                    first,
+                    count,
+                );
+            }
+            let top = start + BLOCK;
+            if top >= n {
+                return;
+            }
+            assert!(
+                block.len() >= (BLOCK - 1) * n + n && columns.len() >= (first + BLOCK - 1) * n + n
+            );
+            // SAFETY: AVX-512F (the type's contract); rows top..n of the columns read and
+            // written (checked above; masked lanes are not touched).
+            unsafe {
+                let x: [*const f64; BLOCK] =
+                    std::array::from_fn(|r| columns.as_ptr().add((first + r) * n));
+                let y: [*mut f64; BLOCK] = std::array::from_fn(|c| block.as_mut_ptr().add(c * n));
+                // -L(start + c, first + r)
+                let f: [[__m512d; BLOCK]; BLOCK] = std::array::from_fn(|c| {
+                    std::array::from_fn(|r| _mm512_set1_pd(-*x[r].add(start + c)))
+                });
+                let mut i = top;
+                while i < n {
+                    let m = mask(n, i);
+                    let xs: [__m512d; BLOCK] =
+                        std::array::from_fn(|r| _mm512_maskz_loadu_pd(m, x[r].add(i)));
+                    for c in 0..BLOCK {
+                        let mut v = _mm512_maskz_loadu_pd(m, y[c].add(i));
+                        for r in 0..BLOCK {
+                            v = _mm512_add_pd(_mm512_mul_pd(f[c][r], xs[r]), v);
+                        }
+                        _mm512_mask_storeu_pd(y[c].add(i), m, v);
+                    }
+                    i += 8;
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,6 +341,28 @@ mod tests {
         };
         let b = DMatrix::from_fn(n, n, |_, _| next());
         &b * b.transpose() + DMatrix::identity(n, n) * d
+    }
+
+    /// `m`'s lower triangle factored by each kernel the CPU has (`None`: a pivot failed).
+    fn kernels(m: &DMatrix<f64>) -> Vec<(&'static str, Option<DMatrix<f64>>)> {
+        let n = m.nrows();
+        let run = |f: &dyn Fn(&mut [f64]) -> bool| {
+            let mut a = m.clone();
+            f(a.as_mut_slice()).then_some(a)
+        };
+        let mut out = vec![("portable", run(&|a| factor(a, n, &Portable)))];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2.
+                out.push(("avx2", run(&|a| unsafe { factor_avx2(a, n) })));
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F.
+                out.push(("avx512", run(&|a| unsafe { factor_avx512(a, n) })));
+            }
+        }
+        out
     }
 
     fn bits(m: &DMatrix<f64>) -> Vec<u64> {
@@ -131,6 +385,19 @@ mod tests {
                 );
                 let rhs = DMatrix::from_fn(n, 2, |i, j| (i as f64 + 1.0) * (j as f64 - 0.5));
                 assert_eq!(bits(&want.solve(&rhs)), bits(&got.solve(&rhs)), "n {n}");
+                // Every kernel this CPU can run, not only the one `cholesky` picks.
+                for (name, factored) in kernels(&m) {
+                    let factored = factored.expect("SPD");
+                    for c in 0..n {
+                        for r in c..n {
+                            assert_eq!(
+                                factored[(r, c)].to_bits(),
+                                want.l_dirty()[(r, c)].to_bits(),
+                                "{name}: n {n}, seed {seed}, ({r}, {c})"
+                            );
+                        }
+                    }
+                }
             }
         }
         // Indefinite, singular, NaN: refused by both.
@@ -142,6 +409,9 @@ mod tests {
             DMatrix::from_element(3, 3, f64::NAN),
         ] {
             assert!(bad.clone().cholesky().is_none());
+            for (name, factored) in kernels(&bad) {
+                assert!(factored.is_none(), "{name}");
+            }
             assert!(cholesky(bad).is_none());
         }
     }
