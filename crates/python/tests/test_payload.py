@@ -19,11 +19,22 @@ except importlib.metadata.PackageNotFoundError:
 from admittance.mujoco.payload import PayloadConfig, run_payload  # noqa: E402
 
 
-def test_a_payload_the_identification_never_saw_in_mujoco():
+@pytest.mark.parametrize("recording_pd", ["unloaded", "loaded"])
+def test_a_payload_the_identification_never_saw_in_mujoco(recording_pd):
     # 2.5 kg, its centre of mass 9.9 cm from the flange (the bars: 0.5 to 3 kg, up to 10 cm).
     payload = {"mass": 2.5, "com": [-0.03, 0.04, 0.085], "principal_inertia": [0.006, 0.005, 0.003], "rpy": [0.4, 0.1, -0.3]}
-    cfg = PayloadConfig(training_duration=30.0, validation_duration=10.0, evaluation_duration=10.0, payload=payload)
+    cfg = PayloadConfig(
+        training_duration=30.0, validation_duration=10.0, evaluation_duration=10.0, payload=payload, recording_pd=recording_pd
+    )
     r = run_payload(cfg, log=lambda s: None)
+    # The PD told of the load tracks the wrist about as well as without payload; untold, the
+    # load drags it more than twice as far.
+    tracking = r["tracking_rms_rad"]
+    wrist_with, wrist_without = (np.asarray(tracking[k])[4:6] for k in ("evaluation_with_payload", "evaluation_without_payload"))
+    if recording_pd == "loaded":
+        assert np.all(wrist_with < 1.5 * wrist_without), tracking
+    else:
+        assert np.all(wrist_with > 2.0 * wrist_without), tracking
     assert r["mass_error_relative"] <= 0.05, r
     assert r["com_error_m"] <= 0.01, r
     # The identification alone reads the payload as a large false torque; carrying the fitted
@@ -34,6 +45,11 @@ def test_a_payload_the_identification_never_saw_in_mujoco():
     e = r["estimate_false_torque"]
     assert e["without_payload_model"] > 5.0 * e["with_payload_model"], e
     assert e["ratio_to_floor"] <= 1.5, e
+
+
+def test_an_unknown_recording_pd_is_refused():
+    with pytest.raises(ValueError, match="recording_pd 'told'"):
+        run_payload(PayloadConfig(recording_pd="told"), log=lambda s: None)
 
 
 def test_with_payload_saves_a_file_every_consumer_loads(tmp_path, baxter):

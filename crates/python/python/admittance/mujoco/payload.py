@@ -10,7 +10,11 @@ docs/experiments.md, "Payload").
 2. A rigid payload (mass, centre of mass off the flange, a rotated inertia) is fixed to the
    tip link in the URDF MuJoCo loads; the arm tracks 20 s of a third excitation (seed 4) with
    it, and ``adm.identify_payload`` fits it on top of the identification (its first second,
-   the PD settling under the new load, left out).
+   the PD settling under the new load, left out). The PD recording with the payload keeps, by
+   default (``recording_pd="unloaded"``), the gains and gravity of the arm without it; with
+   ``"loaded"`` it is the robot's controller told of its load, as after libfranka's
+   ``setLoad`` or UR's ``set_payload``: its gains tuned by the same rule on the arm carrying
+   it, and the payload's gravity compensated.
 3. Judged on a fourth excitation (seed 5), recorded with and without the payload, against
    the floor (the identification's own false torque on the recording without it), in two
    ways:
@@ -66,6 +70,7 @@ class PayloadConfig:
     estimate_cutoff_hz: float = 10.0  # the estimate's low-pass (the arms table's choice on the Panda)
     momentum_gain: float = 50.0  # K_O of the momentum observer (the arms table's)
     warmup: float = 1.0  # s left out of every false torque (the filters settle)
+    recording_pd: str = "unloaded"  # the PD with the payload: "unloaded" (as without it) or "loaded" (told of it)
 
 
 def rpy_matrix(roll, pitch, yaw):
@@ -135,6 +140,8 @@ def run_payload(cfg: PayloadConfig, robots=None, log=print):
     from ._arms import ARMS, conditioned, excitation_motion, record, recording_gains, robots_dir
     from ._plant import MujocoArm
 
+    if cfg.recording_pd not in ("loaded", "unloaded"):
+        raise ValueError(f"recording_pd {cfg.recording_pd!r}: must be 'unloaded' or 'loaded'")
     robots = robots or robots_dir()
     rel, base, tip = ARMS[cfg.arm]
     path = robots / rel
@@ -152,17 +159,24 @@ def run_payload(cfg: PayloadConfig, robots=None, log=print):
             ("evaluation", cfg.evaluation_duration, 5),
         )
     }
-    gains = recording_gains(m, motions["training"]["q"].mean(axis=0), plain.terms)
+    mean_pose = motions["training"]["q"].mean(axis=0)
+    gains = recording_gains(m, mean_pose, plain.terms)
+    # The controller recording with the payload: told of it (the same tuning rule on the arm
+    # carrying it, and its gravity), or left as it was without it.
+    pd_model, pd_gains = m, gains
+    if cfg.recording_pd == "loaded":
+        pd_model = adm.Model.from_urdf_string(urdf_with_payload(text, tip, cfg.payload), base=base, tip=tip)
+        pd_gains = recording_gains(pd_model, mean_pose, loaded.terms)
     rng = np.random.default_rng(cfg.seed)
     log(f"{cfg.arm}: recording in MuJoCo")
     train = record(plain, m, motions["training"], gains, cfg, rng)[0]
     valid = record(plain, m, motions["validation"], gains, cfg, rng)[0]
-    with_tool = record(loaded, m, motions["payload"], gains, cfg, rng)[0]
-    eval_plain = record(plain, m, motions["evaluation"], gains, cfg, rng)[0]
-    eval_tool = record(loaded, m, motions["evaluation"], gains, cfg, rng)[0]
+    with_tool, _, tracking_payload = record(loaded, pd_model, motions["payload"], pd_gains, cfg, rng)
+    eval_plain, _, tracking_plain = record(plain, m, motions["evaluation"], gains, cfg, rng)
+    eval_tool, _, tracking_tool = record(loaded, pd_model, motions["evaluation"], pd_gains, cfg, rng)
     ident = adm.identify(train, m, validation=valid, input_filter_hz=cfg.input_filter_hz)
-    # The PD was tuned without the payload: its first second is the arm settling under the new
-    # load, which no model here describes (the filters' lag on a jerk); the fit takes the rest.
+    # The first second is the arm settling under the new load, which no model here describes
+    # (the filters' lag on a jerk); the fit takes the rest.
     p = adm.identify_payload(with_tool, ident, from_s=cfg.warmup)
     carried = ident.with_payload(p)
     mass, com, inertia = true_payload(cfg.payload)
@@ -195,6 +209,12 @@ def run_payload(cfg: PayloadConfig, robots=None, log=print):
         "false_torque_with_true_payload": true_model,
         "ratio_to_floor": with_model / floor,
         "identification_input_filter_hz": ident.summary.get("input_filter_hz"),
+        # rms of the true angle's distance from the planned one, per joint (rad)
+        "tracking_rms_rad": {
+            "evaluation_without_payload": tracking_plain.tolist(),
+            "evaluation_with_payload": tracking_tool.tolist(),
+            "payload_recording": tracking_payload.tolist(),
+        },
     }
     out["bars"] = {
         "mass within 5 %": out["mass_error_relative"] <= 0.05,
@@ -217,6 +237,13 @@ def main(argv=None):
     p.add_argument("--payload-duration", type=float, default=20.0)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--input-filter-hz", type=float, default=10.0, help="the input conditioning's cut-off, Hz (10, as the arms table; 0: raw signals)")
+    p.add_argument(
+        "--recording-pd",
+        choices=("unloaded", "loaded"),
+        default="unloaded",
+        help="the PD recording with the payload: as without it (the default) or told of it (gains tuned on "
+        "the arm carrying it, its gravity compensated, as after setLoad)",
+    )
     p.add_argument("--out", help="write the numbers to this JSON file")
     a = p.parse_args(argv)
     try:
@@ -236,6 +263,7 @@ def main(argv=None):
         payload=payload,
         seed=a.seed,
         input_filter_hz=a.input_filter_hz,
+        recording_pd=a.recording_pd,
     )
     r = run_payload(cfg, log=lambda s: print(s, file=sys.stderr))
     print(f"{r['arm']} (tip {r['tip']}): payload {r['true']['mass']:.3f} kg identified as {r['identified']['mass']:.4f} kg "
