@@ -277,8 +277,7 @@ def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0):
     from admittance.mujoco import _arms
     from admittance.mujoco._plant import MujocoArm
 
-    rel, base, tip = _arms.ARMS[name]
-    path = _arms.robots_dir() / rel
+    path, base, tip = _arms.arm_source(name, cfg)
     m = adm.Model.from_urdf(str(path), base=base, tip=tip)
     tip = tip or m.tip_link
     arm = MujocoArm(path.read_text(), m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale)
@@ -318,8 +317,7 @@ def timing(names, cfg, log, csv_dir=None, repeats=3):
     from admittance.mujoco._plant import MujocoArm
 
     for name in names:
-        rel, base, tip = _arms.ARMS[name]
-        path = _arms.robots_dir() / rel
+        path, base, tip = _arms.arm_source(name, cfg)
         m = adm.Model.from_urdf(str(path), base=base, tip=tip)
         arm = MujocoArm(path.read_text(), m.joint_names, tip or m.tip_link, m.effort_limit, cfg.dt, cfg.friction_scale)
         duration = cfg.training_duration
@@ -349,7 +347,10 @@ def main():
     from admittance.mujoco import _arms
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--arms", nargs="*", default=list(_arms.ARMS), help="MuJoCo arms (default: all of the arms table)")
+    parser.add_argument("--arms", nargs="*", help="MuJoCo arms (default: all of the arms table; with --urdf, that arm alone)")
+    parser.add_argument("--urdf", help="an arm of your own URDF, recorded in MuJoCo as the table's arms are")
+    parser.add_argument("--base", help="with --urdf: the chain's base link (default: the URDF's root)")
+    parser.add_argument("--tip", help="with --urdf: the chain's tip link (default: the end of the only chain)")
     parser.add_argument("--no-baxter", action="store_true", help="leave out the real Baxter recording")
     parser.add_argument("--training-duration", type=float, default=60.0, help="MuJoCo training recording (s)")
     parser.add_argument("--evaluation-duration", type=float, default=30.0, help="MuJoCo scored recording (s)")
@@ -373,7 +374,21 @@ def main():
     )
     parser.add_argument("--write-csv", metavar="DIR", help="with --timing: write each recording to DIR/ARM.csv")
     args = parser.parse_args()
-    cfg = _arms.ArmsConfig(training_duration=args.training_duration, evaluation_duration=args.evaluation_duration)
+    urdf_arms = {}
+    if args.urdf:
+        if not pathlib.Path(args.urdf).is_file():
+            parser.error(f"--urdf {args.urdf}: no such file")
+        urdf_arms[pathlib.Path(args.urdf).stem] = [str(pathlib.Path(args.urdf).resolve()), args.base, args.tip]
+    elif args.base or args.tip:
+        parser.error("--base and --tip go with --urdf")
+    if args.arms is None:
+        args.arms = list(urdf_arms) or list(_arms.ARMS)
+    unknown = [a for a in args.arms if a not in _arms.ARMS and a not in urdf_arms]
+    if unknown:
+        parser.error(f"--arms: unknown {unknown}; choose among {list(_arms.ARMS) + list(urdf_arms)}")
+    cfg = _arms.ArmsConfig(
+        training_duration=args.training_duration, evaluation_duration=args.evaluation_duration, urdf_arms=urdf_arms
+    )
 
     def log(text):
         print(text, flush=True)

@@ -47,3 +47,64 @@ def test_one_arm_short(tmp_path):
     assert scan[str(r["estimate_cutoff_hz"])] <= floor * (1 + ESTIMATE_NOISE_MARGIN)
     faster = [hz for hz in ESTIMATE_CUTOFFS_HZ if hz > r["estimate_cutoff_hz"]]
     assert all(scan[str(hz)] > floor * (1 + ESTIMATE_NOISE_MARGIN) for hz in faster)
+
+
+def _so101_on_a_platform(path):
+    """The SO-101 of example-robot-data on a platform that also carries an antenna whose
+    inertia MuJoCo refuses (not positive definite, as one of TIAGo's): the kind of tree a
+    mobile manipulator's URDF is."""
+    import xml.etree.ElementTree as ET
+
+    from admittance.mujoco._arms import ARMS, robots_dir
+
+    root = ET.fromstring((robots_dir() / ARMS["so101"][0]).read_text())
+    for name, parent in (("platform", None), ("antenna", "platform")):
+        link = ET.SubElement(root, "link", {"name": name})
+        inertial = ET.SubElement(link, "inertial")
+        ET.SubElement(inertial, "mass", {"value": "0.5"})
+        moments = {"ixx": "0.001", "iyy": "0.001", "izz": "0.001", "ixy": "0.01" if parent else "0", "ixz": "0", "iyz": "0"}
+        ET.SubElement(inertial, "inertia", moments)
+    for name, parent, child in (("mount", "platform", "base_link"), ("antenna_mount", "platform", "antenna")):
+        joint = ET.SubElement(root, "joint", {"name": name, "type": "fixed"})
+        ET.SubElement(joint, "parent", {"link": parent})
+        ET.SubElement(joint, "child", {"link": child})
+        ET.SubElement(joint, "origin", {"xyz": "0.1 0 0.3", "rpy": "0 0 0"})
+    path.write_text(ET.tostring(root, encoding="unicode"))
+
+
+def test_your_own_urdf_through_the_command_line(tmp_path):
+    import json
+
+    from admittance.mujoco.arms import main
+
+    urdf = tmp_path / "platform_arm.urdf"
+    _so101_on_a_platform(urdf)
+    out = tmp_path / "out"
+    args = ["--urdf", str(urdf), "--base", "base_link", "--out", str(out), "--training-duration", "20",
+            "--validation-duration", "10", "--evaluation-duration", "12", "--nodes", "100", "--jobs", "1", "--quiet"]
+    assert main(args) == 0
+    (arm,) = json.loads((out / "results.json").read_text())["arms"]
+    assert arm["arm"] == "platform_arm" and arm["urdf"] == str(urdf.resolve()) and arm["n"] == 5
+    obs = arm["observers"]
+    assert obs["momentum_identified"]["free_false_torque_rms"] < 0.5 * obs["momentum_urdf"]["free_false_torque_rms"], obs
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--urdf", "no/such.urdf"], "--urdf no/such.urdf: no such file"),
+        (["--tip", "link_7"], "--base, --tip and --name go with --urdf"),
+        (["--urdf", "{urdf}", "--name", "panda"], "--name panda: an arm of the table has that name"),
+        (["--urdf", "{urdf}", "--tip", "no_such_link"], "no_such_link"),
+    ],
+)
+def test_your_own_urdf_refused_with_a_reason(tmp_path, capsys, args, message):
+    from admittance.mujoco.arms import main
+
+    urdf = tmp_path / "platform_arm.urdf"
+    _so101_on_a_platform(urdf)
+    with pytest.raises(SystemExit) as e:
+        main([a.replace("{urdf}", str(urdf)) for a in args] + ["--out", str(tmp_path / "out")])
+    assert e.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

@@ -24,6 +24,7 @@ what a real robot's driver gives: quantised angles and the torque commanded.
 DIR`` draws its figures.
 """
 
+from ._arms import robots_dir
 from ._cosim import CosimConfig, run_cosimulation
 
-__all__ = ["CosimConfig", "run_cosimulation"]
+__all__ = ["CosimConfig", "robots_dir", "run_cosimulation"]

@@ -114,6 +114,19 @@ class ArmsConfig:
     warmup: float = 0.5
     momentum_gain: float = 50.0
     evaluation_start: float = 2.0
+    # Arms of the user's own URDFs (``--urdf``): name -> [URDF path, base link or None, tip
+    # link or None], run beside or instead of ``ARMS``.
+    urdf_arms: dict = field(default_factory=dict)
+
+
+def arm_source(name, cfg, robots=None):
+    """The URDF path, base and tip of the arm ``name``: one of ``cfg.urdf_arms`` or of
+    ``ARMS`` (in example-robot-data's ``robots`` folder)."""
+    if name in cfg.urdf_arms:
+        path, base, tip = cfg.urdf_arms[name]
+        return pathlib.Path(path), base, tip
+    rel, base, tip = ARMS[name]
+    return (robots or robots_dir()) / rel, base, tip
 
 
 def robots_dir() -> pathlib.Path:
@@ -305,9 +318,7 @@ def run_arm(name, cfg, log=print, robots=None):
 
 
 def _run_arm(name, cfg, log, robots, stage):
-    robots = robots or robots_dir()
-    rel, base, tip = ARMS[name]
-    path = robots / rel
+    path, base, tip = arm_source(name, cfg, robots)
     started = time.perf_counter()
     timings = {}
     m = adm.Model.from_urdf(str(path), base=base, tip=tip)
@@ -387,7 +398,7 @@ def _run_arm(name, cfg, log, robots, stage):
     pushed_torque = float(np.sqrt(np.mean(pushed_true[w][np.abs(pushed_true[w]).sum(axis=1) > 0] ** 2)))
     result = {
         "arm": name,
-        "urdf": rel,
+        "urdf": str(path) if name in cfg.urdf_arms else ARMS[name][0],
         "joints": m.joint_names,
         "tip": tip,
         "n": m.n,
@@ -490,7 +501,8 @@ def run_all(cfg, log=print, jobs=None, ray=None, retries=0, force=False):
     arms and the names of the failed ones."""
     from admittance import sweep
 
-    robots_dir()  # a clear error before any job starts
+    if any(name not in cfg.urdf_arms for name in cfg.arms):
+        robots_dir()  # a clear error before any job starts
     out = pathlib.Path(cfg.out)
     started = time.perf_counter()
     done = sweep.run_sweep(jobs_of(cfg), out, jobs, ray, retries, force, log=log)

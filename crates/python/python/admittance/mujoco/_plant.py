@@ -33,10 +33,13 @@ def unknown_joint_terms(effort_limits, scale=1.0):
 
 
 def chain_urdf(text: str, chain_joints, tip_link: str, wall=None) -> str:
-    """The URDF for MuJoCo: geometry stripped, every moving joint off the chain made fixed (held
-    at 0, as the Rust loader locks branches), a MuJoCo compiler block, and a small sphere at
-    the tip for contact (with ``wall``)."""
+    """The URDF for MuJoCo: geometry stripped, the links that neither lead to the chain's base
+    nor hang from it left out (a mobile base's sensors and wheels: fixed to the world, they
+    move nothing, and MuJoCo refuses some of their inertias), every moving joint off the chain
+    made fixed (held at 0, as the Rust loader locks branches), a MuJoCo compiler block, and a
+    small sphere at the tip for contact (with ``wall``)."""
     root = ET.fromstring(text)
+    _keep_around_chain(root, set(chain_joints))
     for link in root.findall("link"):
         for tag in ("visual", "collision"):
             for el in link.findall(tag):
@@ -73,6 +76,36 @@ def chain_urdf(text: str, chain_joints, tip_link: str, wall=None) -> str:
                 geo = ET.SubElement(col, "geometry")
                 ET.SubElement(geo, "sphere", {"radius": "0.02"})
     return ET.tostring(root, encoding="unicode")
+
+
+def _keep_around_chain(root, chain):
+    """Removes from the URDF tree ``root`` every link (and the joint to it) that is neither on
+    the path from the root to the chain's base nor below the base."""
+    joints = root.findall("joint")
+    parent = {j.find("child").get("link"): j.find("parent").get("link") for j in joints}
+    children = {}
+    for child, up in parent.items():
+        children.setdefault(up, []).append(child)
+    chain_children = {j.find("child").get("link") for j in joints if j.get("name") in chain}
+    bases = [j.find("parent").get("link") for j in joints if j.get("name") in chain]
+    bases = [b for b in bases if b not in chain_children]
+    if len(bases) != 1:
+        return  # not one chain: leave the tree as it is
+    keep, link = set(), bases[0]
+    while link is not None:
+        keep.add(link)
+        link = parent.get(link)
+    below = [bases[0]]
+    while below:
+        link = below.pop()
+        keep.add(link)
+        below += children.get(link, [])
+    for link in root.findall("link"):
+        if link.get("name") not in keep:
+            root.remove(link)
+    for joint in joints:
+        if joint.find("child").get("link") not in keep:
+            root.remove(joint)
 
 
 @dataclass

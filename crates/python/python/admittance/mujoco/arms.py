@@ -5,6 +5,8 @@ and in free motion (the module ``_arms`` says how; docs/experiments.md has the t
 import argparse
 import sys
 
+import admittance as adm
+
 
 def main(argv=None):
     p = argparse.ArgumentParser(
@@ -13,7 +15,11 @@ def main(argv=None):
         "network, the friction-input network and the hybrid, trained on excitation, judged on other motion.",
     )
     p.add_argument("--out", default="runs/mujoco_arms", help="folder for results.json and table.md")
-    p.add_argument("--arms", help="comma-separated subset (default: all)")
+    p.add_argument("--arms", help="comma-separated subset (default: all; with --urdf, that arm alone)")
+    p.add_argument("--urdf", help="your own arm's URDF, run with the table's plant, recordings and scoring")
+    p.add_argument("--base", help="with --urdf: the chain's base link (default: the URDF's root)")
+    p.add_argument("--tip", help="with --urdf: the chain's tip link (default: the end of the only chain)")
+    p.add_argument("--name", help="with --urdf: the arm's name in the table and its folder (default: the file's stem)")
     p.add_argument("--training-duration", type=float, default=60.0)
     p.add_argument("--evaluation-duration", type=float, default=30.0)
     p.add_argument("--validation-duration", type=float, default=20.0, help="seconds of a third excitation (seed 3) that chooses every setting; 0: none (one recording: blocked cross-validation chooses, and the estimate low-pass is chosen on the training recording)")
@@ -49,14 +55,32 @@ def main(argv=None):
         for what, why in EXCLUDED.items():
             print(f"excluded  {what}: {why}")
         return 0
-    arms = [x for x in (a.arms.split(",") if a.arms else ARMS) if x]
-    unknown = [x for x in arms if x not in ARMS]
+    urdf_arms = {}
+    if a.urdf:
+        import pathlib
+
+        urdf = pathlib.Path(a.urdf)
+        if not urdf.is_file():
+            p.error(f"--urdf {a.urdf}: no such file")
+        name = a.name or urdf.stem
+        if name in ARMS:
+            p.error(f"--name {name}: an arm of the table has that name; give another with --name")
+        try:
+            adm.Model.from_urdf(str(urdf), base=a.base, tip=a.tip)
+        except Exception as e:  # the loader's message names the file and element
+            p.error(f"--urdf {a.urdf}: {e}")
+        urdf_arms[name] = [str(urdf.resolve()), a.base, a.tip]
+    elif a.base or a.tip or a.name:
+        p.error("--base, --tip and --name go with --urdf")
+    default = list(urdf_arms) if urdf_arms else list(ARMS)
+    arms = [x for x in (a.arms.split(",") if a.arms else default) if x]
+    unknown = [x for x in arms if x not in ARMS and x not in urdf_arms]
     if unknown:
-        p.error(f"--arms: unknown {unknown}; choose among {list(ARMS)}")
+        p.error(f"--arms: unknown {unknown}; choose among {list(ARMS) + list(urdf_arms)}")
     cfg = ArmsConfig(
         out=a.out, arms=arms, training_duration=a.training_duration, evaluation_duration=a.evaluation_duration, validation_duration=a.validation_duration,
         nodes=a.nodes, push_force=a.push_force, friction_scale=a.friction_scale,
-        input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed,
+        input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed, urdf_arms=urdf_arms,
     )
     from admittance import _progress
     from admittance.sweep import SweepError
