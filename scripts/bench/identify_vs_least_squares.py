@@ -243,7 +243,9 @@ def scale_torque(data, factor):
     return {**data, "tau": np.asarray(data["tau"]) * factor} if factor != 1.0 else data
 
 
-def baxter(log, torque_scale=1.0):
+def baxter(log, torque_scale=1.0, train_s=(0.0, 120.0), score_s=None):
+    """The real Baxter recording: trained on ``train_s`` = [from, until) s, scored on
+    ``score_s`` (default: the last 30 s)."""
     folder = os.environ.get("ADMITTANCE_DATA")
     path = pathlib.Path(folder or "") / "baxter_rand" / "baxter_rand.csv"
     if not folder or not path.is_file():
@@ -259,9 +261,18 @@ def baxter(log, torque_scale=1.0):
         data[key] = np.stack([table[:, col[f"{key}.{j}"]] for j in m.joint_names], axis=1)
     t = data["t"]
     data = scale_torque(data, torque_scale)
-    train = rows(data, t < 120.0)
-    scored = {"data": data, "mask": t >= t[-1] - 30.0 + 1e-9}
-    return compare("Baxter (real), 120 s -> 30 s", m, pinocchio_chain(urdf, m.joint_names), train, scored, log)
+    train = rows(data, (t >= train_s[0]) & (t < train_s[1]))
+    if score_s is None:
+        mask, label = t >= t[-1] - 30.0 + 1e-9, "Baxter (real), 120 s -> 30 s"
+    else:
+        mask = (t >= score_s[0]) & (t < score_s[1])
+        label = f"Baxter {train_s[0]:g}-{train_s[1]:g} -> {score_s[0]:g}-{score_s[1]:g} s"
+    if train_s != (0.0, 120.0) and score_s is None:
+        label = f"Baxter {train_s[0]:g}-{train_s[1]:g} s -> last 30 s"
+    overlap = np.any(mask & (t >= train_s[0]) & (t < train_s[1]))
+    if overlap:
+        raise SystemExit("--baxter-train and --baxter-score overlap: score on motion the fit never saw")
+    return compare(label, m, pinocchio_chain(urdf, m.joint_names), train, {"data": data, "mask": mask}, log)
 
 
 def drop_rows(data, fraction, seed):
@@ -352,6 +363,8 @@ def main():
     parser.add_argument("--base", help="with --urdf: the chain's base link (default: the URDF's root)")
     parser.add_argument("--tip", help="with --urdf: the chain's tip link (default: the end of the only chain)")
     parser.add_argument("--no-baxter", action="store_true", help="leave out the real Baxter recording")
+    parser.add_argument("--baxter-train", default="0,120", help="the Baxter stretch fitted on, FROM,UNTIL in s (0,120)")
+    parser.add_argument("--baxter-score", help="the Baxter stretch scored, FROM,UNTIL in s (default: the last 30 s)")
     parser.add_argument("--training-duration", type=float, default=60.0, help="MuJoCo training recording (s)")
     parser.add_argument("--evaluation-duration", type=float, default=30.0, help="MuJoCo scored recording (s)")
     parser.add_argument("--json", help="write every point to this file")
@@ -398,7 +411,18 @@ def main():
         return
 
     log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
-    points = [] if args.no_baxter else baxter(log, args.torque_scale)
+    def stretch(text, flag):
+        try:
+            a, b = (float(v) for v in text.split(","))
+        except ValueError:
+            parser.error(f"{flag} {text}: needs FROM,UNTIL in seconds")
+        if not a < b:
+            parser.error(f"{flag} {text}: FROM must come before UNTIL")
+        return (a, b)
+
+    train_s = stretch(args.baxter_train, "--baxter-train")
+    score_s = stretch(args.baxter_score, "--baxter-score") if args.baxter_score else None
+    points = [] if args.no_baxter else baxter(log, args.torque_scale, train_s, score_s)
     for name in args.arms:
         points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows)
     ratios = [p["ratio"] for p in points]

@@ -54,7 +54,7 @@ pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use identification::{
     excitation, identify, identify_payload, is_physically_consistent, BaseParameters, Excitation,
     ExcitationSettings, FourierSeries, Identification, IdentificationFile, IdentificationSettings,
-    IdentificationSummary, JointTerms, LimitUse, Samples, DEFAULT_EXCITATION_RANGE,
+    IdentificationSummary, JointTerms, LimitUse, RangeExcursion, Samples, DEFAULT_EXCITATION_RANGE,
     DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT, IDENTIFICATION_FORMAT,
     IDENTIFICATION_FORMAT_VERSION,
 };

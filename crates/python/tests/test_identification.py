@@ -229,3 +229,12 @@ def test_dropped_rows_are_put_back_on_an_even_grid(baxter, truth_and_data):
     assert "gaps" not in whole.summary["held_out"]
     e_whole, e_dropped = other_motion_error(whole, baxter, friction), other_motion_error(ident, baxter, friction)
     assert e_dropped < 1.2 * e_whole, (e_dropped, e_whole)
+
+
+def test_the_summary_records_the_training_range(baxter, truth_and_data):
+    """Each joint's lowest and highest position fitted on (raw signals: the recorded ones),
+    so that a consumer can tell motion that leaves it."""
+    _, data = truth_and_data
+    ident = adm.identify(data, baxter, input_filter_hz=0)
+    q = np.asarray(data["q"])
+    assert np.array_equal(np.asarray(ident.summary["training_range"]), np.stack([q.min(axis=0), q.max(axis=0)], axis=1))

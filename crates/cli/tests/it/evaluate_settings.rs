@@ -327,3 +327,57 @@ fn a_network_of_another_arm_is_refused() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("--network"), "{}", text(&o));
 }
+
+#[test]
+fn evaluate_names_the_joints_that_leave_the_training_range() {
+    let f = files();
+    let eval = |data: &str| {
+        ok(&[
+            "evaluate",
+            "--data",
+            data,
+            "--urdf",
+            &f.urdf,
+            "--identification",
+            &f.ident10,
+        ])
+    };
+    let heading = "outside the identification's training range";
+    // The training recording itself stays inside.
+    let inside = eval(&f.train);
+    assert!(!inside.contains(heading), "{inside}");
+    // The same motion with the first joint 0.5 rad further: that joint, and only it.
+    let text = std::fs::read_to_string(&f.train).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let column = header.split(',').position(|c| c == "q.left_s0").unwrap();
+    let mut shifted = format!("{header}\n");
+    for line in lines {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        cells[column] = (cells[column].parse::<f64>().unwrap() + 0.5).to_string();
+        shifted += &(cells.join(",") + "\n");
+    }
+    let path = f.path("shifted.csv");
+    std::fs::write(&path, shifted).unwrap();
+    let outside = eval(&path);
+    assert!(outside.contains(heading), "{outside}");
+    let listed: Vec<&str> = outside
+        .lines()
+        .skip_while(|l| !l.starts_with(heading))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .collect();
+    assert_eq!(listed.len(), 1, "{outside}");
+    assert!(listed[0].starts_with("  left_s0: "), "{outside}");
+    // About 0.5 rad beyond (the conditioning's edges aside).
+    let beyond: f64 = listed[0]
+        .rsplit('(')
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((beyond - 0.5).abs() < 0.05, "{outside}");
+}

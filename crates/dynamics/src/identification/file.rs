@@ -275,6 +275,23 @@ fn check_summary(s: &IdentificationSummary, n: usize) -> Result<(), String> {
             short(*d)
         ));
     }
+    if !(s.training_range.is_empty() || s.training_range.len() == n) {
+        return Err(format!(
+            "summary.training_range has {} pairs for {n} joints",
+            s.training_range.len()
+        ));
+    }
+    if let Some([low, high]) = s
+        .training_range
+        .iter()
+        .find(|[low, high]| !(low.is_finite() && high.is_finite() && low <= high))
+    {
+        return Err(format!(
+            "summary.training_range holds [{}, {}]: each joint's lowest and highest position, finite, lowest first",
+            short(*low),
+            short(*high)
+        ));
+    }
     let errors = [
         ("expected_false_torque_rms", &s.expected_false_torque_rms),
         ("prior_false_torque_rms", &s.prior_false_torque_rms),

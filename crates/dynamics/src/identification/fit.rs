@@ -15,6 +15,7 @@ use crate::identification::recording_checks::check_against_urdf;
 use crate::identification::samples::Samples;
 use crate::identification::settings::IdentificationSettings;
 use crate::identification::springs::{choose_springs, joint_column, Choice};
+use crate::identification::training_range::training_range;
 use crate::identification::urdf_torques::UrdfTorques;
 use crate::identification::{Identification, IdentificationSummary};
 use crate::model::Model;
@@ -226,6 +227,7 @@ pub fn identify(
         step_response_s: 0.0,
         acceleration_gain,
         prior_scale,
+        training_range: training_range(train),
     };
     Ok(Identification {
         summary,

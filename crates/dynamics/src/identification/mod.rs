@@ -31,6 +31,7 @@ mod recording_checks;
 mod samples;
 mod settings;
 mod springs;
+mod training_range;
 mod urdf_torques;
 
 pub use base::BaseParameters;
@@ -45,6 +46,7 @@ pub use joint_terms::JointTerms;
 pub use payload::identify_payload;
 pub use samples::Samples;
 pub use settings::IdentificationSettings;
+pub use training_range::RangeExcursion;
 
 use serde::{Deserialize, Serialize};
 
@@ -128,6 +130,12 @@ pub struct IdentificationSummary {
     /// units, masses uniformly off); the fitted bodies carry it.
     #[serde(default = "unit_gain")]
     pub prior_scale: f64,
+    /// Per joint, the lowest and highest position of the training samples (rad or m; empty:
+    /// not recorded). Outside it the fitted springs, offsets and gravity extrapolate, which
+    /// held-out stretches of the same recording cannot judge: `admittance evaluate` reports
+    /// the samples that leave it ([`Identification::range_excursions`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub training_range: Vec<[f64; 2]>,
 }
 
 fn unit_gain() -> f64 {
@@ -330,6 +338,7 @@ impl IdentificationSummary {
             step_response_s: 0.0,
             acceleration_gain: 1.0,
             prior_scale: 1.0,
+            training_range: Vec::new(),
         }
     }
 }

@@ -141,6 +141,19 @@ fn what_consumers_take_from_the_summary_is_checked() {
     .unwrap_err();
     assert!(e.contains("summary.delay_s holds 1e9 s"), "{e}");
     let e = load_edited(dir.path(), |p| {
+        p["summary"]["training_range"] = serde_json::json!([[0.0, 1.0]])
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("summary.training_range has 1 pairs for 7 joints"),
+        "{e}"
+    );
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["training_range"] = serde_json::json!(vec![[1.0, -1.0]; 7])
+    })
+    .unwrap_err();
+    assert!(e.contains("summary.training_range holds [1, -1]"), "{e}");
+    let e = load_edited(dir.path(), |p| {
         p["summary"]["expected_false_torque_rms"] = serde_json::json!([0.1, -1.0])
     })
     .unwrap_err();
