@@ -88,17 +88,33 @@ trait Kernel {
         first: usize,
         count: usize,
     ) {
-        for c in 0..width {
-            let j = start + c;
-            self.column(
-                &mut block[c * n + j..c * n + n],
-                columns,
-                n,
-                j,
-                first,
-                count,
-            );
-        }
+        column_by_column(self, block, columns, n, start, width, first, count);
+    }
+}
+
+/// [`Kernel::block`] one column after the other.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn column_by_column<K: Kernel + ?Sized>(
+    kernel: &K,
+    block: &mut [f64],
+    columns: &[f64],
+    n: usize,
+    start: usize,
+    width: usize,
+    first: usize,
+    count: usize,
+) {
+    for c in 0..width {
+        let j = start + c;
+        kernel.column(
+            &mut block[c * n + j..c * n + n],
+            columns,
+            n,
+            j,
+            first,
+            count,
+        );
     }
 }
 
@@ -263,17 +279,7 @@ mod avx512 {
             count: usize,
         ) {
             if width != BLOCK || count != BLOCK {
-                for c in 0..width {
-                    let j = start + c;
-                    self.column(
-                        &mut block[c * n + j..c * n + n],
-                        columns,
-                        n,
-                        j,
-                        first,
-                        count,
-                    );
-                }
+                super::column_by_column(self, block, columns, n, start, width, first, count);
                 return;
             }
             // The triangle above row start + 4, column by column; the rows below it, which
