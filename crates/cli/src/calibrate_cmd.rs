@@ -104,7 +104,19 @@ pub fn calibrate_contact(args: &CalibrateContactArgs) -> Result<(), CliError> {
     let mut recordings = Vec::with_capacity(args.data.len());
     for path in &args.data {
         let data = crate::train_cmd::load_data(path, Some(&joints))?;
-        recordings.push(rows_between(path, data, args.from, args.until, 100)?);
+        let data = rows_between(path, data, args.from, args.until, 100)?;
+        // A floor calibrated where the model extrapolates holds its error, not the noise.
+        let conditioned =
+            admittance_scenario::ConditionedSamples::new(&data, ident.summary.input_filter_hz)
+                .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+        for line in crate::training_range::lines(&ident, &arm, &conditioned.q) {
+            eprintln!(
+                "admittance: warning: {}: outside the identification's training range, where its model \
+                 extrapolates and the floor takes its error: {line}",
+                path.display()
+            );
+        }
+        recordings.push(data);
     }
     let observer = MomentumObserverConfig {
         gain: JointValues::Uniform(args.gain),

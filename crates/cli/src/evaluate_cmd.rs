@@ -10,7 +10,7 @@ use std::sync::Arc;
 use admittance_control::{
     HybridObserver, MomentumObserver, MomentumObserverConfig, Observer, ObserverInput, StepStatus,
 };
-use admittance_dynamics::{rnea, Data, Identification, Model};
+use admittance_dynamics::{rnea, Data, Identification};
 use admittance_learning::broad::BroadModel;
 use clap::Args;
 
@@ -404,7 +404,7 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         );
     }
     if let Some(id) = &ident {
-        text += &range_report(id, &arm, &rows.q[first * n..]);
+        text += &crate::training_range::report(id, &arm, &rows.q[first * n..]);
     }
     if let Some(floor) = &args.contact_floor {
         let (id, from) = (ident.as_ref(), args.from);
@@ -420,35 +420,4 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         });
     }
     Ok(())
-}
-
-/// The joints whose evaluated positions leave the identification's training range (empty
-/// when none do, or the file records no range): there its springs, offsets and gravity
-/// extrapolate, and its expected false torque does not hold.
-fn range_report(ident: &Identification, arm: &Model, q: &[f64]) -> String {
-    let excursions = ident.range_excursions(q);
-    let samples = q.len() / arm.nq().max(1);
-    let mut text = String::new();
-    for ((e, name), [low, high]) in excursions
-        .iter()
-        .zip(arm.joint_names())
-        .zip(&ident.summary.training_range)
-    {
-        if e.samples_outside > 0 {
-            text += &format!(
-                "  {name}: {:.1} % of the samples, {:.3} to {:.3} against {low:.3} to {high:.3} trained ({:.3} beyond)\n",
-                100.0 * e.samples_outside as f64 / samples.max(1) as f64,
-                e.lowest,
-                e.highest,
-                e.furthest
-            );
-        }
-    }
-    if text.is_empty() {
-        return text;
-    }
-    format!(
-        "outside the identification's training range (its springs, offsets and gravity extrapolate there; \
-         record motion that covers these positions and identify again):\n{text}"
-    )
 }

@@ -34,6 +34,7 @@ mod progress;
 mod report_cmd;
 mod run_cmd;
 mod train_cmd;
+mod training_range;
 
 use std::process::ExitCode;
 

@@ -329,7 +329,7 @@ fn a_network_of_another_arm_is_refused() {
 }
 
 #[test]
-fn evaluate_names_the_joints_that_leave_the_training_range() {
+fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
     let f = files();
     let eval = |data: &str| {
         ok(&[
@@ -380,4 +380,24 @@ fn evaluate_names_the_joints_that_leave_the_training_range() {
         .parse()
         .unwrap();
     assert!((beyond - 0.5).abs() < 0.05, "{outside}");
+    // A contact floor calibrated there is warned about, naming the file and the joint.
+    let calibrate = |data: &str| {
+        ok(&[
+            "calibrate-contact",
+            data,
+            "--identification",
+            &f.ident10,
+            "--out",
+            &f.path("floor.json"),
+        ])
+    };
+    let warning = "outside the identification's training range";
+    assert!(!calibrate(&f.train).contains(warning));
+    let warned = calibrate(&path);
+    let lines: Vec<&str> = warned.lines().filter(|l| l.contains(warning)).collect();
+    assert_eq!(lines.len(), 1, "{warned}");
+    assert!(
+        lines[0].contains("shifted.csv") && lines[0].contains("left_s0: "),
+        "{warned}"
+    );
 }
