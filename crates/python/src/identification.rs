@@ -215,6 +215,34 @@ pub fn load_identification(
 
 #[pymethods]
 impl PyIdentification {
+    /// Per joint, how the positions `q` (`(n,)` or `(N, n)`, conditioned as the
+    /// identification was) leave `summary["training_range"]`: a list of dicts with
+    /// `samples_outside`, `furthest` (how far beyond, rad or m), `lowest` and `highest`;
+    /// empty when the identification records no range.
+    fn range_excursions<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.identification.model.nq();
+        let (q, _, single) = rows(q, "q", n, true)?;
+        crate::convert::require_finite_rows(&q, n, single, "q")?;
+        let list: Vec<serde_json::Value> = self
+            .identification
+            .range_excursions(&q)
+            .iter()
+            .map(|e| {
+                serde_json::json!({
+                    "samples_outside": e.samples_outside,
+                    "furthest": e.furthest,
+                    "lowest": e.lowest,
+                    "highest": e.highest,
+                })
+            })
+            .collect();
+        json_to_py(py, &serde_json::Value::Array(list))
+    }
+
     /// The torque (N m) the identified arm needs: `(n,)` for one state, `(N, n)` for rows.
     fn predict<'py>(
         &self,

@@ -238,3 +238,11 @@ def test_the_summary_records_the_training_range(baxter, truth_and_data):
     ident = adm.identify(data, baxter, input_filter_hz=0)
     q = np.asarray(data["q"])
     assert np.array_equal(np.asarray(ident.summary["training_range"]), np.stack([q.min(axis=0), q.max(axis=0)], axis=1))
+    assert all(e["samples_outside"] == 0 and e["furthest"] == 0.0 for e in ident.range_excursions(q))
+    moved = q.copy()
+    moved[:, 2] += 0.3
+    e = ident.range_excursions(moved)
+    assert [x["samples_outside"] > 0 for x in e] == [i == 2 for i in range(baxter.n)]
+    assert abs(e[2]["furthest"] - 0.3) < 1e-12 and e[2]["highest"] == moved[:, 2].max()
+    with pytest.raises(ValueError):
+        ident.range_excursions(q[:, :3])

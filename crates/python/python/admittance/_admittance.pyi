@@ -653,6 +653,10 @@ class Identification:
         not trained on."""
     def predict(self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> FloatArray:
         """The torque the identified arm needs: ``(n,)`` or ``(N, n)`` rows."""
+    def range_excursions(self, q: ArrayLike) -> List[dict]:
+        """Per joint, how the positions ``q`` (``(n,)`` or ``(N, n)``, conditioned as the
+        identification was) leave ``summary["training_range"]``: ``samples_outside``,
+        ``furthest`` (rad or m beyond), ``lowest``, ``highest``; empty without a range."""
     def save(self, path: StrPath, data: Optional[str] = None) -> None:
         """Writes the identification file (JSON, versioned, checksummed, atomic)."""
     def with_payload(self, payload: "Payload") -> "Identification":
