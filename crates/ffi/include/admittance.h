@@ -102,6 +102,11 @@
 // controller's safe hold (`ADM_FAULT_STALE_MEASUREMENT`) follows if it lasts.
 #define ADM_OUT_STALE_INPUT (1 << 11)
 
+// `AdmOutput::flags`: some joint's measured angle lies outside the positions the
+// observer's identification was fitted on (its `summary.training_range`): the model
+// extrapolates there and the estimate may hold a false torque the floor did not see.
+#define ADM_OUT_OUTSIDE_TRAINING_RANGE (1 << 12)
+
 // `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 // 1 us more per step on a 7-joint arm.
 #define ADM_CONFIG_WRENCH 1

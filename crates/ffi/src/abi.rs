@@ -81,6 +81,10 @@ pub const ADM_OUT_COLLISION: u32 = 1 << 10;
 /// (a driver repeating its last packet, a frozen encoder), from its first stale sample; the
 /// controller's safe hold (`ADM_FAULT_STALE_MEASUREMENT`) follows if it lasts.
 pub const ADM_OUT_STALE_INPUT: u32 = 1 << 11;
+/// `AdmOutput::flags`: some joint's measured angle lies outside the positions the
+/// observer's identification was fitted on (its `summary.training_range`): the model
+/// extrapolates there and the estimate may hold a false torque the floor did not see.
+pub const ADM_OUT_OUTSIDE_TRAINING_RANGE: u32 = 1 << 12;
 
 /// `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 /// 1 us more per step on a 7-joint arm.

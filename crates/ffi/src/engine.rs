@@ -45,6 +45,10 @@ pub fn report_of(status: &RobotStatus, wrench: bool) -> StepReport {
     set(status.waiting_for_angles, ADM_OUT_WAITING_FOR_ANGLES);
     set(status.holding_pose, ADM_OUT_HOLDING_POSE);
     set(status.stale_input, ADM_OUT_STALE_INPUT);
+    set(
+        status.outside_training_range,
+        ADM_OUT_OUTSIDE_TRAINING_RANGE,
+    );
     let contact = status.contact.unwrap_or_default();
     set(contact.contact, ADM_OUT_CONTACT);
     set(contact.collision, ADM_OUT_COLLISION);

@@ -70,6 +70,11 @@ pub struct RobotStatus {
     /// from the first stale sample, long before the controller's safe hold
     /// (`stale_steps`) acts.
     pub stale_input: bool,
+    /// Some joint's measured angle lies outside the positions the observer's identification
+    /// was fitted on (`summary.training_range`): its springs, offsets and gravity
+    /// extrapolate there, so the estimate may hold a false torque its floor did not see.
+    /// Never set without an identification that records its range.
+    pub outside_training_range: bool,
     /// Contact flags (issue 31), with a contact floor.
     pub contact: Option<ContactState>,
 }
@@ -109,6 +114,8 @@ pub struct RobotLoop {
     /// With the contact detector: the wrench at the touched link, and each joint's child
     /// link frame.
     contact_wrench: Option<(WrenchEstimator, Vec<usize>)>,
+    /// Per joint, the observer's identification's training range (empty: none recorded).
+    training_range: Vec<[f64; 2]>,
 }
 
 impl RobotLoop {
@@ -135,6 +142,15 @@ impl RobotLoop {
         }
         let loop_config = config.loop_config(folder);
         let mut closed_loop = ClosedLoop::from_config(&model, &loop_config, trained)?;
+        let training_range = match (&loop_config.observer.identification, config.observer.kind) {
+            (Some(path), ObserverKind::Momentum | ObserverKind::Hybrid) => {
+                admittance_dynamics::Identification::load(path, &model)
+                    .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?
+                    .summary
+                    .training_range
+            }
+            _ => Vec::new(),
+        };
         let n = model.nq();
         let rate = config.control_rate_hz;
         let chain = SignalChain::new(n, config.signals.filter_cutoff_hz, rate)
@@ -206,6 +222,7 @@ impl RobotLoop {
             wrench: None,
             contact,
             contact_wrench,
+            training_range,
         })
     }
 
@@ -282,6 +299,12 @@ impl RobotLoop {
             .sample_time
             .iter()
             .any(|&t| input.time - t > half_period);
+        // A NaN (a refused or missing angle) compares false: not counted.
+        let outside_training_range = self
+            .training_range
+            .iter()
+            .zip(&self.q_in)
+            .any(|([low, high], &q)| q < *low || q > *high);
         let mut status = RobotStatus {
             controller_fault: None,
             observer_fault: false,
@@ -291,6 +314,7 @@ impl RobotLoop {
             warmup: input.time < self.warmup,
             holding_pose: input.desired.is_none(),
             stale_input,
+            outside_training_range,
             contact: self.contact.as_ref().map(|c| c.state()),
         };
         if waiting {

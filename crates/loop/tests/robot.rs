@@ -546,3 +546,45 @@ fn a_bad_setting_of_a_deployment_is_located_in_its_loop_file() {
         )
     );
 }
+
+#[test]
+fn an_angle_outside_the_identifications_training_range_is_flagged() {
+    // The slow motion moves every joint 0.1 rad about the pose; an identification fitted on
+    // joint 3 within +-0.05 rad of it sees that joint leave its range for part of the
+    // motion, and nothing else. Without a recorded range nothing is ever flagged.
+    let tmp = tempfile::tempdir().unwrap();
+    let model = model();
+    let mut ident = admittance_dynamics::Identification::from_model(model.clone());
+    let save = |ident: &admittance_dynamics::Identification, name: &str| {
+        let path = tmp.path().join(name);
+        ident.save(&path, &model, Default::default()).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let unrecorded = save(&ident, "unrecorded.json");
+    ident.summary.training_range = POSE.iter().map(|&p| [p - 1.0, p + 1.0]).collect();
+    ident.summary.training_range[3] = [POSE[3] - 0.05, POSE[3] + 0.05];
+    let narrow = save(&ident, "narrow.json");
+    let flagged = |file: &str, joint3_only: bool| {
+        let config = RobotConfig::from_toml_with(
+            LOOP_TOML,
+            Path::new("loop.toml"),
+            &[&format!("observer.identification = \"{file}\"")],
+        )
+        .unwrap();
+        let mut l = RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap();
+        let mut data = Data::new(&model);
+        let mut count = 0;
+        for k in 0..3000 {
+            let (q, tau) = motion(&model, &mut data, k);
+            let s = step_measured(&mut l, k, &q, &tau);
+            let outside = (q[3] - POSE[3]).abs() > 0.05;
+            if joint3_only {
+                assert_eq!(s.outside_training_range, outside, "step {k}");
+            }
+            count += usize::from(s.outside_training_range);
+        }
+        count
+    };
+    assert_eq!(flagged(&unrecorded, false), 0);
+    assert!(flagged(&narrow, true) > 100);
+}

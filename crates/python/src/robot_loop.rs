@@ -123,8 +123,9 @@ impl PyRobotLoop {
 
     /// What the last step saw: `ok`, `controller_fault` (text or None), `observer_fault`,
     /// `nonfinite_input`, `implausible` (None or `(joint, "angle" | "jump" | "torque")`),
-    /// `waiting_for_angles`, `warmup`, `holding_pose`, `stale_input`, `contact` (None or a dict of
-    /// `contact`, `collision`, `link`); None before the first step.
+    /// `waiting_for_angles`, `warmup`, `holding_pose`, `stale_input`, `outside_training_range`
+    /// (an angle outside the positions the identification was fitted on), `contact` (None or
+    /// a dict of `contact`, `collision`, `link`); None before the first step.
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some(s) = &self.status else {
@@ -154,6 +155,7 @@ impl PyRobotLoop {
         d.set_item("warmup", s.warmup)?;
         d.set_item("holding_pose", s.holding_pose)?;
         d.set_item("stale_input", s.stale_input)?;
+        d.set_item("outside_training_range", s.outside_training_range)?;
         match s.contact {
             Some(c) => {
                 let cd = PyDict::new(py);

@@ -67,6 +67,8 @@ def test_safe_by_default(deployed):
     for k in range(1, 300):
         loop.step(k * 1e-3, POSE)
     assert loop.status["holding_pose"]
+    # An observer on the URDF has no training range: never outside it.
+    assert loop.status["outside_training_range"] is False
     np.testing.assert_allclose(loop.reference[0], POSE, atol=1e-9)
 
 
