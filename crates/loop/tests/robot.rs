@@ -43,6 +43,29 @@ fn robot_loop(overrides: &[&str]) -> RobotLoop {
     RobotLoop::new(model(), &config, Path::new("."), None, None).unwrap()
 }
 
+/// `ident` saved as `dir/name` (its path as text).
+fn save_identification(
+    dir: &Path,
+    model: &Model,
+    ident: &admittance_dynamics::Identification,
+    name: &str,
+) -> String {
+    let path = dir.join(name);
+    ident.save(&path, model, Default::default()).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// The loop of `LOOP_TOML` with its momentum observer on the identification file `file`.
+fn loop_on_identification(model: &Model, file: &str) -> RobotLoop {
+    let config = RobotConfig::from_toml_with(
+        LOOP_TOML,
+        Path::new("loop.toml"),
+        &[&format!("observer.identification = \"{file}\"")],
+    )
+    .unwrap();
+    RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap()
+}
+
 /// One 1 kHz step with measured angles and torques.
 fn step_measured(
     l: &mut RobotLoop,
@@ -254,21 +277,13 @@ fn the_identifications_torque_delay_is_applied_at_run_time() {
     let model = model();
     let mut ident = admittance_dynamics::Identification::from_model(model.clone());
     let save = |ident: &admittance_dynamics::Identification, name: &str| {
-        let path = tmp.path().join(name);
-        ident.save(&path, &model, Default::default()).unwrap();
-        path.to_str().unwrap().to_string()
+        save_identification(tmp.path(), &model, ident, name)
     };
     let plain = save(&ident, "plain.json");
     ident.summary.delay_s = vec![0.02; 7];
     let delayed = save(&ident, "delayed.json");
     let false_torque = |file: &str| {
-        let config = RobotConfig::from_toml_with(
-            LOOP_TOML,
-            Path::new("loop.toml"),
-            &[&format!("observer.identification = \"{file}\"")],
-        )
-        .unwrap();
-        let mut l = RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap();
+        let mut l = loop_on_identification(&model, file);
         let mut data = Data::new(&model);
         let mut sum = 0.0;
         for k in 0..4000 {
@@ -556,22 +571,14 @@ fn an_angle_outside_the_identifications_training_range_is_flagged() {
     let model = model();
     let mut ident = admittance_dynamics::Identification::from_model(model.clone());
     let save = |ident: &admittance_dynamics::Identification, name: &str| {
-        let path = tmp.path().join(name);
-        ident.save(&path, &model, Default::default()).unwrap();
-        path.to_str().unwrap().to_string()
+        save_identification(tmp.path(), &model, ident, name)
     };
     let unrecorded = save(&ident, "unrecorded.json");
     ident.summary.training_range = POSE.iter().map(|&p| [p - 1.0, p + 1.0]).collect();
     ident.summary.training_range[3] = [POSE[3] - 0.05, POSE[3] + 0.05];
     let narrow = save(&ident, "narrow.json");
     let flagged = |file: &str, joint3_only: bool| {
-        let config = RobotConfig::from_toml_with(
-            LOOP_TOML,
-            Path::new("loop.toml"),
-            &[&format!("observer.identification = \"{file}\"")],
-        )
-        .unwrap();
-        let mut l = RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap();
+        let mut l = loop_on_identification(&model, file);
         let mut data = Data::new(&model);
         let mut count = 0;
         for k in 0..3000 {
