@@ -245,6 +245,19 @@ pub fn model(args: &ModelArgs) -> Result<(), CliError> {
         model.tip().name,
         model.nq()
     );
+    let g = model.gravity;
+    if g != nalgebra::Vector3::new(0.0, 0.0, -9.81) {
+        // No "-0.0000" for the rounding residue of a half turn.
+        let g = g.map(|v| if v.abs() < 5e-5 { 0.0 } else { v });
+        outln!(
+            out,
+            "gravity  ({:.4}, {:.4}, {:.4}) m/s^2 in {}'s axes (the root link's -z: the joints above the base turn it)",
+            g.x,
+            g.y,
+            g.z,
+            model.base_link
+        );
+    }
     out.push('\n');
     outln!(
         out,

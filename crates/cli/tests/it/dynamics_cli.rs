@@ -179,6 +179,43 @@ fn model_summary_lists_joints_limits_and_masses() {
     }
 }
 
+/// A base link below the root and turned against it (here hung upside down): the summary
+/// says where gravity points in its axes; an upright base's summary has no such line.
+#[test]
+fn model_summary_states_the_gravity_of_a_turned_base() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("hung.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="hung">
+  <link name="world"/>
+  <link name="mount"/>
+  <link name="upper">
+    <inertial><origin xyz="0.3 0 0"/><mass value="2.0"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial>
+  </link>
+  <joint name="hang" type="fixed">
+    <parent link="world"/><child link="mount"/><origin xyz="0 0 2" rpy="3.141592653589793 0 0"/>
+  </joint>
+  <joint name="shoulder" type="revolute">
+    <parent link="mount"/><child link="upper"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="50" velocity="2"/>
+  </joint>
+</robot>"#,
+    )
+    .unwrap();
+    let path = urdf.to_str().unwrap();
+    let (code, stdout, stderr) = admittance(&["model", "--urdf", path, "--base", "mount"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("gravity  (0.0000, 0.0000, 9.8100) m/s^2 in mount's axes"),
+        "{stdout}"
+    );
+    let (code, stdout, stderr) = admittance(&["model", "--urdf", path]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(!stdout.contains("gravity"), "{stdout}");
+}
+
 /// Issue 14: inputs that overflow the arithmetic are an error naming them, not `null`
 /// with exit 0; a missing and a non-UTF-8 URDF are bad input (exit 3).
 #[test]

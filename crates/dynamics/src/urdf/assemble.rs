@@ -1,11 +1,10 @@
 //! Step 6, assembly: the chain's moving joints with the fixed joints between them folded
 //! into their placements, the bodies from folding, the final checks, the [`Model`].
 
-use nalgebra::Vector3;
-
 use super::chain::Chain;
 use super::fold::Folder;
 use super::joint::{chain_joint, ChainJoint};
+use super::mount::mount;
 use super::tree::Tree;
 use super::xml::Ctx;
 use super::UrdfOptions;
@@ -68,7 +67,8 @@ pub(super) fn assemble(
         }
         folder.attach(tree.joints[j].child, placement, body)?;
     }
-    let folded = folder.finish(options)?;
+    let mount = mount(ctx, tree, chain, options)?;
+    let folded = folder.finish(options, &mount.above_base)?;
 
     // The last body must resist motion about (along) its own axis, or the forward
     // dynamics are singular whatever the state.
@@ -105,7 +105,7 @@ pub(super) fn assemble(
         bodies: folded.bodies,
         frames: folded.frames,
         tip_frame,
-        gravity: Vector3::new(0.0, 0.0, -9.81),
+        gravity: mount.gravity,
         link_masses: folded.link_masses,
         excluded_links: folded.excluded_links,
         warnings: folded.warnings,

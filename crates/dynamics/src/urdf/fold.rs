@@ -295,8 +295,13 @@ impl<'c, 'a, 'i> Folder<'c, 'a, 'i> {
         });
     }
 
-    /// Checks that every joint named in the options was reached, and returns the result.
-    pub(super) fn finish(self, options: &UrdfOptions) -> Result<Folded, UrdfError> {
+    /// Checks that every joint named in the options was reached (or, for a lock, lies
+    /// `above_base`: it turns the mount), and returns the result.
+    pub(super) fn finish(
+        self,
+        options: &UrdfOptions,
+        above_base: &[usize],
+    ) -> Result<Folded, UrdfError> {
         let named = options
             .lock
             .iter()
@@ -304,7 +309,7 @@ impl<'c, 'a, 'i> Folder<'c, 'a, 'i> {
             .chain(options.drop.iter().map(|n| ("drop", n)));
         for (option, name) in named {
             let j = self.tree.joint_index[name.as_str()];
-            if self.reached[j] {
+            if self.reached[j] || (option == "lock" && above_base.contains(&j)) {
                 continue;
             }
             let why = if self.in_dropped[j] {

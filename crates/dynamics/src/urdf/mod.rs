@@ -5,7 +5,7 @@
 //! tree: the only pass over the whole file), [`chain`] (base, tip, the joints between;
 //! the default tip rule), [`inertial`] (validation of the masses the model uses),
 //! [`fold`] (fixed attachments and locked or dropped branches join the bodies),
-//! [`assemble`] (the [`Model`]).
+//! [`mount`] (the base's pose in the root, gravity), [`assemble`] (the [`Model`]).
 //!
 //! What is built:
 //! * the path from `base` to `tip`; its revolute, continuous and prismatic joints become
@@ -17,7 +17,10 @@
 //!   held at 0 unless [`UrdfOptions::lock`] says otherwise) and fold in the same way, or
 //!   are left out when named in [`UrdfOptions::drop`]; [`Model::locked_branches`] and
 //!   [`Model::dropped_branches`] list them;
-//! * links before the first moving joint belong to the base (their mass never moves).
+//! * links before the first moving joint belong to the base (their mass never moves);
+//! * gravity is the root link's `-z` (9.81 m/s^2) in the base link's axes ([`mount`]): the
+//!   joints above a base that is not the root turn it (moving ones held at their
+//!   [`UrdfOptions::lock`] position, 0 by default).
 //!
 //! Only the parts of the file the model uses are validated: a broken inertia on a
 //! robot's other arm does not stop loading this one.
@@ -27,6 +30,7 @@ mod chain;
 mod fold;
 mod inertial;
 mod joint;
+mod mount;
 mod tree;
 mod xml;
 
@@ -47,8 +51,8 @@ pub struct UrdfOptions {
     pub tip: Option<String>,
     /// Make the warnings about inertias on the chain errors.
     pub strict: bool,
-    /// Lock positions (rad or m) of joints in branches off the chain; the others are
-    /// locked at 0.
+    /// Lock positions (rad or m) of joints in branches off the chain, or above the base
+    /// (they turn its mount, and with it gravity); the others are locked at 0.
     pub lock: Vec<(String, f64)>,
     /// Joints whose subtree is left out of the model (mass and all) instead of locked.
     pub drop: Vec<String>,

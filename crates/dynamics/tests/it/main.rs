@@ -8,6 +8,7 @@ mod common;
 mod bad_input;
 mod excitation;
 mod identification;
+mod mount;
 mod oracle;
 mod payload;
 mod perturbed;
