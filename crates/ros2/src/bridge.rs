@@ -446,6 +446,40 @@ pub fn contact_message(status: &RobotStatus, wrench: Option<&[f64]>) -> Option<F
 /// The label of the contact message's dimension: what each value is.
 pub const CONTACT_LABEL: &str = "contact,collision,link,fx,fy,fz,mx,my,mz";
 
+/// The loop's status of a step as a `std_msgs/msg/Float64MultiArray` of flags, 1 or 0 in the
+/// order of [`STATUS_LABEL`] (the C ABI's `ADM_OUT_*` bits of the same names): what the
+/// estimate beside it can be trusted for. Published after each torque message, with or
+/// without a contact floor; like the contact message it has no header.
+pub fn status_message(status: &RobotStatus) -> Float64MultiArray {
+    let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    let data = vec![
+        flag(status.controller_fault.is_some()),
+        flag(status.observer_fault),
+        flag(status.nonfinite_input),
+        flag(status.implausible.is_some()),
+        flag(status.waiting_for_angles),
+        flag(status.warmup),
+        flag(status.holding_pose),
+        flag(status.stale_input),
+        flag(status.outside_training_range),
+    ];
+    Float64MultiArray {
+        layout: MultiArrayLayout {
+            dim: vec![MultiArrayDimension {
+                label: STATUS_LABEL.into(),
+                size: data.len() as u32,
+                stride: data.len() as u32,
+            }],
+            data_offset: 0,
+        },
+        data,
+    }
+}
+
+/// The label of the status message's dimension: the flags in order.
+pub const STATUS_LABEL: &str = "controller_fault,observer_fault,nonfinite_input,implausible_input,\
+waiting_for_angles,warmup,holding_pose,stale_input,outside_training_range";
+
 /// The message types the bridge publishes (for the node and the docs).
 pub const OUTPUT_TYPES: [&str; 3] = [JOINT_STATE, WRENCH_STAMPED, FLOAT64_MULTI_ARRAY];
 

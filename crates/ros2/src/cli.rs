@@ -82,6 +82,11 @@ pub struct BridgeArgs {
     /// published when the deployment has a contact floor (`[contact] floor`).
     #[arg(long, default_value = "/admittance/contact")]
     pub contact_topic: String,
+    /// Topic of the loop's status flags after each torque message (Float64MultiArray `[controller_fault,
+    /// observer_fault, nonfinite_input, implausible_input, waiting_for_angles, warmup,
+    /// holding_pose, stale_input, outside_training_range]`, 1 or 0).
+    #[arg(long, default_value = "/admittance/status")]
+    pub status_topic: String,
     /// Also publish the admittance model's compliant reference (JointState position and
     /// velocity) on this topic.
     #[arg(long)]
@@ -267,7 +272,8 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
                 format!(" and {} (contact flags)", a.contact_topic)
             } else {
                 String::new()
-            },
+            }
+            + &format!(" and {} (status flags)", a.status_topic),
         dds.domain_id,
         if dds.localhost_only { " (localhost only)" } else { "" },
         1.0 / bridge.dt(),
@@ -279,6 +285,7 @@ fn bridge(a: &BridgeArgs) -> Result<(), Failure> {
         wrench_topic: a.wrench_topic.clone(),
         reference_topic: a.reference_topic.clone(),
         contact_topic: a.contact_topic.clone(),
+        status_topic: a.status_topic.clone(),
         duration: run_for,
     };
     let mut seen = BTreeSet::new();

@@ -25,5 +25,6 @@ pub mod node;
 pub mod stats;
 
 pub use bridge::{
-    contact_message, offline, Bridge, BridgeConfig, InputError, InputMap, Stepped, WrenchFrame,
+    contact_message, offline, status_message, Bridge, BridgeConfig, InputError, InputMap, Stepped,
+    WrenchFrame, CONTACT_LABEL, STATUS_LABEL,
 };

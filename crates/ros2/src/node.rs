@@ -19,7 +19,7 @@ use rustdds_api::mio1::{Events, Interest, Poll, Token};
 use rustdds_api::DomainParticipantBuilder;
 use serde::{Deserialize, Serialize};
 
-use crate::bridge::{contact_message, Bridge};
+use crate::bridge::{contact_message, status_message, Bridge};
 use crate::stats::{stamp_rate, BridgeStats, Percentiles};
 
 use ros2_client::dds::rustdds as rustdds_api;
@@ -162,6 +162,9 @@ pub struct BridgeTopics {
     /// `[contact, collision, link, fx, fy, fz, mx, my, mz]`), published when the
     /// loop has a contact floor.
     pub contact_topic: String,
+    /// The loop's status flags (Float64MultiArray, `STATUS_LABEL`'s order), published after
+    /// each torque message.
+    pub status_topic: String,
     /// Stop after this long (none: until SIGINT or SIGTERM).
     pub duration: Option<Duration>,
 }
@@ -195,6 +198,12 @@ pub fn run_bridge(
     let contact_pub = publisher::<Float64MultiArray>(
         &mut node,
         &topics.contact_topic,
+        FLOAT64_MULTI_ARRAY_TYPE,
+        output_qos(100),
+    )?;
+    let status_pub = publisher::<Float64MultiArray>(
+        &mut node,
+        &topics.status_topic,
         FLOAT64_MULTI_ARRAY_TYPE,
         output_qos(100),
     )?;
@@ -261,6 +270,7 @@ pub fn run_bridge(
                     if let Some(flags) = contact_message(&stepped.status, wrench) {
                         ok &= contact_pub.publish(flags).is_ok();
                     }
+                    ok &= status_pub.publish(status_message(&stepped.status)).is_ok();
                     let done_wall = wall_ns();
                     take_ns.push(taken.elapsed().as_nanos() as i64);
                     if let Some(r) = info.received_timestamp() {

@@ -11,7 +11,9 @@ use admittance_bag::msgs::JointState;
 use admittance_bag::Profile;
 use admittance_loop::{RobotInput, RobotLoop};
 use admittance_ros2::node::fake_sample;
-use admittance_ros2::{contact_message, offline, Bridge, BridgeConfig, WrenchFrame};
+use admittance_ros2::{
+    contact_message, offline, status_message, Bridge, BridgeConfig, WrenchFrame,
+};
 
 /// The deployment folder, written once for the whole test binary.
 fn deployment() -> PathBuf {
@@ -251,4 +253,43 @@ fn contact_flags_are_published_only_with_a_contact_floor() {
         "contact,collision,link,fx,fy,fz,mx,my,mz"
     );
     assert_eq!(m.values().unwrap().len(), 9);
+}
+
+#[test]
+fn status_flags_follow_the_loop_and_their_label() {
+    let mut bridge = Bridge::new(&config("franka")).unwrap();
+    let stepped = bridge.process(&messages(1, &chain())[0]).unwrap();
+    let m = status_message(&stepped.status);
+    let names: Vec<&str> = m.layout.dim[0].label.split(',').collect();
+    assert_eq!(names.len(), m.data.len());
+    assert_eq!(m.values().unwrap().len(), names.len());
+    let at = |m: &admittance_bag::msgs::Float64MultiArray, name: &str| {
+        m.data[names.iter().position(|n| *n == name).unwrap()]
+    };
+    // The first step: the flags the loop reports, nothing stale or outside the range.
+    let st = &stepped.status;
+    for (name, set) in [
+        ("warmup", st.warmup),
+        ("holding_pose", st.holding_pose),
+        ("waiting_for_angles", st.waiting_for_angles),
+        ("controller_fault", st.controller_fault.is_some()),
+    ] {
+        assert_eq!(at(&m, name), f64::from(u8::from(set)), "{name}");
+    }
+    assert_eq!(at(&m, "stale_input"), 0.0);
+    assert_eq!(at(&m, "outside_training_range"), 0.0);
+    // Each flag lands under its own name.
+    let mut status = stepped.status;
+    status.stale_input = true;
+    status.outside_training_range = true;
+    let m = status_message(&status);
+    assert_eq!(at(&m, "stale_input"), 1.0);
+    assert_eq!(at(&m, "outside_training_range"), 1.0);
+    assert_eq!(at(&m, "controller_fault"), 0.0);
+    let before = status_message(&stepped.status);
+    let changed: Vec<&str> = (0..names.len())
+        .filter(|&k| m.data[k] != before.data[k])
+        .map(|k| names[k])
+        .collect();
+    assert_eq!(changed, ["stale_input", "outside_training_range"]);
 }
