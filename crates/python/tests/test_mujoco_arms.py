@@ -89,6 +89,47 @@ def test_your_own_urdf_through_the_command_line(tmp_path):
     assert obs["momentum_identified"]["free_false_torque_rms"] < 0.5 * obs["momentum_urdf"]["free_false_torque_rms"], obs
 
 
+@pytest.mark.parametrize("rpy", ["0 0 0", "3.141592653589793 0 0.3", "1.5707963267948966 0.2 0"])
+def test_a_turned_mount_gives_mujocos_gravity(tmp_path, rpy):
+    """An arm hung from a ceiling or a wall in a larger URDF (the base link turned against the
+    root): our model's gravity torques equal MuJoCo's, which simulates the whole tree from the
+    root."""
+    import xml.etree.ElementTree as ET
+
+    import mujoco
+    import numpy as np
+
+    import admittance as adm
+    from admittance.mujoco._arms import ARMS, robots_dir
+    from admittance.mujoco._plant import chain_urdf
+
+    root = ET.fromstring((robots_dir() / ARMS["so101"][0]).read_text())
+    ET.SubElement(root, "link", {"name": "cell"})
+    joint = ET.SubElement(root, "joint", {"name": "mount", "type": "fixed"})
+    ET.SubElement(joint, "parent", {"link": "cell"})
+    ET.SubElement(joint, "child", {"link": "base_link"})
+    ET.SubElement(joint, "origin", {"xyz": "0 0 2", "rpy": rpy})
+    urdf = tmp_path / "hung.urdf"
+    urdf.write_text(ET.tostring(root, encoding="unicode"))
+    m = adm.Model.from_urdf(str(urdf), base="base_link")
+    assert abs(np.linalg.norm(m.gravity) - 9.81) < 1e-12
+    assert (m.gravity[2] == -9.81) == (rpy == "0 0 0")
+    plant = mujoco.MjSpec.from_string(chain_urdf(urdf.read_text(), m.joint_names, m.tip_link)).compile()
+    data = mujoco.MjData(plant)
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        q = rng.uniform(m.lower, m.upper)
+        for name, value in zip(m.joint_names, q):
+            data.qpos[plant.joint(name).qposadr[0]] = value
+        mujoco.mj_forward(plant, data)
+        theirs = np.array([data.qfrc_bias[plant.joint(name).dofadr[0]] for name in m.joint_names])
+        ours = np.asarray(adm.rnea(m, q, np.zeros(m.n), np.zeros(m.n)))
+        # MuJoCo's compiler bounds the SO-101's tiny link masses and inertias (`boundmass`,
+        # `balanceinertia`): a few 1e-5 of the torque, upright too. A wrong gravity direction
+        # is an error of the torque's own size.
+        np.testing.assert_allclose(ours, theirs, rtol=1e-4, atol=1e-4 * np.abs(theirs).max())
+
+
 @pytest.mark.parametrize(
     "args, message",
     [
