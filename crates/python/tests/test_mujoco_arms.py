@@ -104,11 +104,15 @@ def test_a_turned_mount_gives_mujocos_gravity(tmp_path, rpy):
     from admittance.mujoco._plant import chain_urdf
 
     root = ET.fromstring((robots_dir() / ARMS["so101"][0]).read_text())
-    ET.SubElement(root, "link", {"name": "cell"})
-    joint = ET.SubElement(root, "joint", {"name": "mount", "type": "fixed"})
-    ET.SubElement(joint, "parent", {"link": "cell"})
-    ET.SubElement(joint, "child", {"link": "base_link"})
-    ET.SubElement(joint, "origin", {"xyz": "0 0 2", "rpy": rpy})
+    # cell -> (turned) world -> base_link: an arm's file whose own root is called "world",
+    # wrapped in a workcell's (MuJoCo would take that link as its world body).
+    for name in ("cell", "world"):
+        ET.SubElement(root, "link", {"name": name})
+    for name, parent, child, pose in (("mount", "cell", "world", rpy), ("world_joint", "world", "base_link", "0 0 0")):
+        joint = ET.SubElement(root, "joint", {"name": name, "type": "fixed"})
+        ET.SubElement(joint, "parent", {"link": parent})
+        ET.SubElement(joint, "child", {"link": child})
+        ET.SubElement(joint, "origin", {"xyz": "0 0 2" if parent == "cell" else "0 0 0", "rpy": pose})
     urdf = tmp_path / "hung.urdf"
     urdf.write_text(ET.tostring(root, encoding="unicode"))
     m = adm.Model.from_urdf(str(urdf), base="base_link")

@@ -40,6 +40,7 @@ def chain_urdf(text: str, chain_joints, tip_link: str, wall=None) -> str:
     small sphere at the tip for contact (with ``wall``)."""
     root = ET.fromstring(text)
     _keep_around_chain(root, set(chain_joints))
+    _rename_inner_world(root)
     for link in root.findall("link"):
         for tag in ("visual", "collision"):
             for el in link.findall(tag):
@@ -76,6 +77,27 @@ def chain_urdf(text: str, chain_joints, tip_link: str, wall=None) -> str:
                 geo = ET.SubElement(col, "geometry")
                 ET.SubElement(geo, "sphere", {"radius": "0.02"})
     return ET.tostring(root, encoding="unicode")
+
+
+def _rename_inner_world(root):
+    """MuJoCo takes a link named ``world`` as its own world body wherever it sits in the tree:
+    below a turned mount (an arm's file wrapped in a workcell's) that would drop the mount and
+    simulate the arm upright. Such a link that is not the root is renamed ``world_link``
+    (never the chain's base or tip: those are the arm's own links)."""
+    children = {j.find("child").get("link") for j in root.findall("joint")}
+    if "world" not in children:
+        return
+    new = "world_link"
+    while any(link.get("name") == new for link in root.findall("link")):
+        new += "_"
+    for link in root.findall("link"):
+        if link.get("name") == "world":
+            link.set("name", new)
+    for joint in root.findall("joint"):
+        for tag in ("parent", "child"):
+            el = joint.find(tag)
+            if el is not None and el.get("link") == "world":
+                el.set("link", new)
 
 
 def _keep_around_chain(root, chain):
