@@ -27,7 +27,8 @@ pub struct ChainArgs {
     /// warning.
     #[arg(long)]
     strict: bool,
-    /// Hold a joint of a branch off the chain at VALUE (rad or m) instead of 0; repeatable.
+    /// Hold a joint of a branch off the chain, or above the base (it turns the mount, and
+    /// gravity with it), at VALUE (rad or m) instead of 0; repeatable.
     #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
     lock: Vec<String>,
     /// Leave the branch behind JOINT out of the model (its mass too) instead of locking it;

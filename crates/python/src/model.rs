@@ -63,7 +63,8 @@ impl PyModel {
     /// Revolute, continuous, prismatic and fixed joints; fixed joints fold their child's
     /// inertia into the moving body; moving branches off the chain are held at 0 (or at
     /// `lock={"joint": value}`) with their mass kept, or left out (`drop=["joint"]`).
-    /// Physically impossible inertias load with a warning (`warnings`) unless `strict`. A
+    /// Gravity is the root link's -z in `base`'s axes (`gravity`): joints above the base
+    /// turn it, moving ones at 0 or their `lock` value. Physically impossible inertias load with a warning (`warnings`) unless `strict`. A
     /// bad file is a `ValueError` naming the file, line and element; a missing one an
     /// `OSError`.
     #[staticmethod]
