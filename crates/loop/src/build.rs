@@ -100,7 +100,7 @@ fn estimate_source<Training>(
     trained: Option<BroadModel>,
 ) -> Result<EstimateSource, LoopError> {
     let spec = &config.observer;
-    let (observer, torque_delay_s) = match observer(model, config, trained)? {
+    let (observer, fitted) = match observer(model, config, trained)? {
         None if spec.kind == ObserverKind::Oracle => return Ok(EstimateSource::Oracle),
         None => return Ok(EstimateSource::None),
         Some(observer) => observer,
@@ -117,18 +117,27 @@ fn estimate_source<Training>(
         rate_hz: config.control_rate_hz,
     };
     let stage = ObserverStage::new(observer, &settings)?
-        .with_torque_delay(&torque_delay_s, config.control_rate_hz)?;
+        .with_torque_delay(&fitted.delay_s, config.control_rate_hz)?
+        .with_training_range(fitted.training_range);
     Ok(EstimateSource::Observer(Box::new(stage)))
 }
 
+/// What an identification an observer runs on was fitted with: its torque delays and
+/// training range (both empty without one).
+#[derive(Default)]
+struct Fitted {
+    delay_s: Vec<f64>,
+    training_range: Vec<[f64; 2]>,
+}
+
 /// The external-torque observer (docs/method.md section 5) and, when it runs on an
-/// identification, the torque delays that identification was fitted with; `None` for
-/// `none` and `oracle`.
+/// identification, what that identification was fitted with (read once, with the
+/// observer); `None` for `none` and `oracle`.
 fn observer<Training>(
     model: &Model,
     config: &LoopConfig<Training>,
     trained: Option<BroadModel>,
-) -> Result<Option<(Box<dyn Observer + Send>, Vec<f64>)>, LoopError> {
+) -> Result<Option<(Box<dyn Observer + Send>, Fitted)>, LoopError> {
     let spec = &config.observer;
     let momentum_err = |e: ConfigError| component("observer.momentum", e);
     let momentum = || -> Result<_, LoopError> {
@@ -137,14 +146,18 @@ fn observer<Training>(
                 .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?;
             let observer = MomentumObserver::from_identification(&ident, &spec.momentum)
                 .map_err(momentum_err)?;
-            return Ok((observer, ident.summary.delay_s.clone()));
+            let fitted = Fitted {
+                delay_s: ident.summary.delay_s.clone(),
+                training_range: ident.summary.training_range.clone(),
+            };
+            return Ok((observer, fitted));
         }
         let nominal = model
             .with_scaled_inertias(spec.nominal_inertia_scale)
             .map_err(|e| LoopError::invalid("observer.nominal_inertia_scale", e.to_string()))?;
         let observer =
             MomentumObserver::new(Arc::new(nominal), &spec.momentum).map_err(momentum_err)?;
-        Ok((observer, Vec::new()))
+        Ok((observer, Fitted::default()))
     };
     // A network of the wrong shape (its key in the observer is `model`) is at fault where
     // it came from: the file `observer.network`, or the training of the caller's.
@@ -172,21 +185,21 @@ fn observer<Training>(
     Ok(match spec.kind {
         ObserverKind::None | ObserverKind::Oracle => None,
         ObserverKind::Momentum => {
-            let (observer, delay) = momentum()?;
-            Some((Box::new(observer) as Box<dyn Observer + Send>, delay))
+            let (observer, fitted) = momentum()?;
+            Some((Box::new(observer) as Box<dyn Observer + Send>, fitted))
         }
         ObserverKind::Hybrid => {
             let network = network()?;
-            let (observer, delay) = momentum()?;
+            let (observer, fitted) = momentum()?;
             Some((
                 Box::new(HybridObserver::new(observer, network).map_err(network_err)?) as _,
-                delay,
+                fitted,
             ))
         }
         // The loop low-passes every estimate (observer.cutoff_hz): none inside.
         ObserverKind::Learned => Some((
             Box::new(LearnedObserver::new(network()?, 0.0).map_err(network_err)?) as _,
-            Vec::new(),
+            Fitted::default(),
         )),
     })
 }

@@ -197,6 +197,16 @@ impl ClosedLoop {
         }
     }
 
+    /// Per joint, the positions `[min, max]` the observer's identification was fitted on
+    /// (`IdentificationSummary::training_range`); empty when the estimate runs on no
+    /// identification or it records none.
+    pub fn observer_training_range(&self) -> &[[f64; 2]] {
+        match &self.estimate_source {
+            EstimateSource::Observer(stage) => stage.training_range(),
+            _ => &[],
+        }
+    }
+
     /// The compliant reference `q_r` of the last step.
     pub fn q_r(&self) -> &[f64] {
         &self.q_r

@@ -114,8 +114,6 @@ pub struct RobotLoop {
     /// With the contact detector: the wrench at the touched link, and each joint's child
     /// link frame.
     contact_wrench: Option<(WrenchEstimator, Vec<usize>)>,
-    /// Per joint, the observer's identification's training range (empty: none recorded).
-    training_range: Vec<[f64; 2]>,
 }
 
 impl RobotLoop {
@@ -142,15 +140,6 @@ impl RobotLoop {
         }
         let loop_config = config.loop_config(folder);
         let mut closed_loop = ClosedLoop::from_config(&model, &loop_config, trained)?;
-        let training_range = match (&loop_config.observer.identification, config.observer.kind) {
-            (Some(path), ObserverKind::Momentum | ObserverKind::Hybrid) => {
-                admittance_dynamics::Identification::load(path, &model)
-                    .map_err(|e| LoopError::invalid("observer.identification", e.to_string()))?
-                    .summary
-                    .training_range
-            }
-            _ => Vec::new(),
-        };
         let n = model.nq();
         let rate = config.control_rate_hz;
         let chain = SignalChain::new(n, config.signals.filter_cutoff_hz, rate)
@@ -222,7 +211,6 @@ impl RobotLoop {
             wrench: None,
             contact,
             contact_wrench,
-            training_range,
         })
     }
 
@@ -301,7 +289,8 @@ impl RobotLoop {
             .any(|&t| input.time - t > half_period);
         // A NaN (a refused or missing angle) compares false: not counted.
         let outside_training_range = self
-            .training_range
+            .closed_loop
+            .observer_training_range()
             .iter()
             .zip(&self.q_in)
             .any(|([low, high], &q)| q < *low || q > *high);

@@ -23,6 +23,9 @@ pub struct ObserverStage {
     raw: Vec<f64>,
     alpha: f64,
     warmup: f64,
+    /// Per joint, the positions `[min, max]` the observer's identification was fitted on
+    /// (empty without an identification that records them).
+    training_range: Vec<[f64; 2]>,
 }
 
 /// How an [`ObserverStage`] feeds its observer and shapes its estimate (the `[observer]`
@@ -69,6 +72,7 @@ impl ObserverStage {
             raw: vec![0.0; n],
             alpha,
             warmup: settings.warmup,
+            training_range: Vec::new(),
         })
     }
 
@@ -89,6 +93,19 @@ impl ObserverStage {
         }
         self.delay = InputDelay::new(delay_s, rate_hz)?;
         Ok(self)
+    }
+
+    /// The stage with the training range of its observer's identification
+    /// (`IdentificationSummary::training_range`; empty: none recorded).
+    pub fn with_training_range(mut self, range: Vec<[f64; 2]>) -> Self {
+        self.training_range = range;
+        self
+    }
+
+    /// Per joint, the positions the observer's identification was fitted on (empty when
+    /// it records none, or the observer runs on no identification).
+    pub(crate) fn training_range(&self) -> &[[f64; 2]] {
+        &self.training_range
     }
 
     /// Updates `estimate` from the measurement at `time`; false when the observer
