@@ -293,9 +293,9 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
     let mut text = format!(
         "identified {} joints from {} samples in {seconds:.1} s; held out: {}\n\
          ridge {:.1e}, {} base parameters, condition number {:.1}, bodies a free fit would make impossible: {:?}\n\
-         expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}\n",
+         expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}  {}\n",
         arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
-        s.projected_bodies, "joint", "URDF", "identified", "springs"
+        s.projected_bodies, "joint", "URDF", "identified", "springs", "positions trained on"
     );
     if s.prior_scale != 1.0 {
         text = format!(
@@ -313,19 +313,30 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
     );
     let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
     for (i, name) in arm.joint_names().enumerate() {
+        let range = s
+            .training_range
+            .get(i)
+            .map_or("-".to_string(), |[low, high]| {
+                format!("{low:.2} to {high:.2}")
+            });
         text += &format!(
-            "  {name:<16} {:>10.3} {:>12.3} {:>8}\n",
+            "  {name:<16} {:>10.3} {:>12.3} {:>8}  {range}\n",
             s.prior_false_torque_rms.get(i).copied().unwrap_or(f64::NAN),
             s.expected_false_torque_rms[i],
             if s.springs[i] { "yes" } else { "-" }
         );
     }
     text += &format!(
-        "  {:<16} {:>10.3} {:>12.3}\nwrote {}\n",
+        "  {:<16} {:>10.3} {:>12.3}\n",
         "all joints",
         total(&s.prior_false_torque_rms),
         total(&s.expected_false_torque_rms),
-        out.display()
     );
+    if !s.training_range.is_empty() {
+        text += "beyond the positions trained on the model extrapolates (its springs, offsets and \
+                 gravity): `admittance evaluate` lists data that go there, the run-time loop flags \
+                 each such step (outside_training_range)\n";
+    }
+    text += &format!("wrote {}\n", out.display());
     text
 }

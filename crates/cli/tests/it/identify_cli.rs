@@ -75,6 +75,21 @@ fn identify_then_evaluate_on_other_motion() {
         "{}",
         text(&o)
     );
+    // Each joint's row ends with the positions it was trained on, as the file records them.
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let s0 = &saved["payload"]["summary"]["training_range"][0];
+    let s0_row = format!(
+        "{:.2} to {:.2}",
+        s0[0].as_f64().unwrap(),
+        s0[1].as_f64().unwrap()
+    );
+    let printed = text(&o);
+    let line = printed
+        .lines()
+        .find(|l| l.trim_start().starts_with("left_s0"))
+        .unwrap();
+    assert!(line.ends_with(&s0_row), "{line} / {s0_row}");
+    assert!(printed.contains("positions trained on"), "{printed}");
     let o = admittance(&[
         "evaluate",
         "--data",
