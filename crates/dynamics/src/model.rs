@@ -241,6 +241,8 @@ pub struct Model {
     pub(crate) warnings: Vec<LoadWarning>,
     pub(crate) locked_branches: Vec<LockedBranch>,
     pub(crate) dropped_branches: Vec<DroppedBranch>,
+    /// The lock positions the model was loaded with (`UrdfOptions::lock`), as given.
+    pub(crate) lock_options: Vec<(String, f64)>,
 }
 
 impl Model {
@@ -269,6 +271,12 @@ impl Model {
     /// The branches left out of the model on request, with their mass.
     pub fn dropped_branches(&self) -> &[DroppedBranch] {
         &self.dropped_branches
+    }
+
+    /// The lock positions the model was loaded with (`UrdfOptions::lock`, `--lock`), as
+    /// given: with the base, tip and dropped branches, what loads it again from its URDF.
+    pub fn lock_options(&self) -> &[(String, f64)] {
+        &self.lock_options
     }
 
     /// Index of a moving joint by name.

@@ -15,8 +15,12 @@ use crate::model::Model;
 
 /// The `format` tag of identification files.
 pub const IDENTIFICATION_FORMAT: &str = "admittance-identification";
-/// The `format_version` this build writes and reads.
-pub const IDENTIFICATION_FORMAT_VERSION: u64 = 1;
+/// The `format_version` this build writes. It reads 1 too: version 2 added `gravity`,
+/// `lock` and `drop` (a version 1 file was made with gravity `(0, 0, -9.81)` in the base's
+/// axes and no lock or drop recorded).
+pub const IDENTIFICATION_FORMAT_VERSION: u64 = 2;
+/// Gravity of a file that does not state it (version 1).
+const VERSION_1_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 
 /// What an identification file holds (its `payload`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -28,6 +32,16 @@ pub struct IdentificationFile {
     pub base: String,
     /// The tip frame.
     pub tip: String,
+    /// Lock positions the model was loaded with (rad or m), as given (`--lock`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub lock: BTreeMap<String, f64>,
+    /// Joints whose branches were left out of the model (`--drop`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub drop: Vec<String>,
+    /// Gravity in the base's axes the model was fitted with (m/s^2); absent in version 1
+    /// files, which were fitted with `(0, 0, -9.81)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
     /// Joint names in chain order.
     pub joints: Vec<String>,
     /// [`Model::fingerprint`] of the URDF model (hex): which arm this belongs to.
@@ -70,6 +84,13 @@ impl Identification {
             urdf,
             base: urdf_model.base_link.clone(),
             tip: urdf_model.tip().name.clone(),
+            lock: urdf_model.lock_options().iter().cloned().collect(),
+            drop: urdf_model
+                .dropped_branches()
+                .iter()
+                .map(|b| b.joint.clone())
+                .collect(),
+            gravity: Some(urdf_model.gravity.into()),
             joints: urdf_model.joint_names().map(str::to_string).collect(),
             urdf_fingerprint: format!("{:016x}", urdf_model.fingerprint()),
             inertial_parameters: inertial_parameters(&self.model),
@@ -131,16 +152,22 @@ impl Identification {
             .map(|d| d.join(&stated))
             .filter(|p| stated.is_relative() && p.exists());
         let urdf_path = beside.unwrap_or(stated);
-        let model =
-            Model::from_urdf_file(&urdf_path, Some(&file.base), Some(&file.tip)).map_err(|e| {
-                err(
-                    path,
-                    format!(
-                        "names the URDF {}, which does not load: {e}",
-                        urdf_path.display()
-                    ),
-                )
-            })?;
+        let options = crate::UrdfOptions {
+            base: Some(file.base.clone()),
+            tip: Some(file.tip.clone()),
+            lock: file.lock.iter().map(|(j, v)| (j.clone(), *v)).collect(),
+            drop: file.drop.clone(),
+            ..crate::UrdfOptions::default()
+        };
+        let model = Model::from_urdf_file_with(&urdf_path, &options).map_err(|e| {
+            err(
+                path,
+                format!(
+                    "names the URDF {}, which does not load: {e}",
+                    urdf_path.display()
+                ),
+            )
+        })?;
         Ok((Self::load(path, &model)?, model))
     }
 
@@ -161,6 +188,7 @@ impl Identification {
                 names.join(", ")
             )));
         }
+        check_gravity(file, urdf_model).map_err(|m| err(path, m))?;
         check_physical(file).map_err(|m| err(path, m))?;
         check_summary(&file.summary, n).map_err(|m| err(path, m))?;
         let model = crate::algorithms::regressor::with_inertial_parameters(
@@ -173,6 +201,28 @@ impl Identification {
             summary: file.summary.clone(),
         })
     }
+}
+
+/// The model's gravity is the one the file was fitted with: the fingerprint covers the arm,
+/// not its mount, and a base turned another way (a lock on a joint above it, or a file of
+/// version 1 made when gravity was always the base's own -z) fits other parameters.
+fn check_gravity(file: &IdentificationFile, model: &Model) -> Result<(), String> {
+    let stated = file.gravity.unwrap_or(VERSION_1_GRAVITY);
+    let g = model.gravity;
+    let close = stated
+        .iter()
+        .zip(g.iter())
+        .all(|(a, b)| (a - b).abs() <= 1e-9 * (1.0 + a.abs()));
+    if close {
+        return Ok(());
+    }
+    let locks: Vec<String> = file.lock.iter().map(|(j, v)| format!("{j}={v}")).collect();
+    Err(format!(
+        "was fitted with gravity ({:.4}, {:.4}, {:.4}) m/s^2 in {}'s axes, this model has ({:.4}, {:.4}, {:.4}): load the arm with the base{} it was identified with, or identify it again{}",
+        stated[0], stated[1], stated[2], file.base, g.x, g.y, g.z,
+        if locks.is_empty() { String::new() } else { format!(" and locks ({})", locks.join(", ")) },
+        if file.gravity.is_none() { " (the file predates gravity following a turned base's mount)" } else { "" }
+    ))
 }
 
 /// The largest magnitude a stored coefficient may have (kg, kg m, kg m^2, N m and their
@@ -340,8 +390,8 @@ fn read_envelope(path: &Path) -> Result<Value, DynamicsError> {
         ));
     }
     match v.get("format_version").and_then(Value::as_u64) {
-        Some(IDENTIFICATION_FORMAT_VERSION) => {}
-        other => return Err(err(path, format!("format_version {other:?}: this build reads version {IDENTIFICATION_FORMAT_VERSION}"))),
+        Some(1..=IDENTIFICATION_FORMAT_VERSION) => {}
+        other => return Err(err(path, format!("format_version {other:?}: this build reads versions 1 to {IDENTIFICATION_FORMAT_VERSION}"))),
     }
     let stored = v
         .get("checksum")

@@ -111,5 +111,6 @@ pub(super) fn assemble(
         warnings: folded.warnings,
         locked_branches: folded.locked,
         dropped_branches: folded.dropped,
+        lock_options: options.lock.clone(),
     })
 }

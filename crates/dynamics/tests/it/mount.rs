@@ -96,3 +96,76 @@ fn an_upright_base_keeps_the_roots_gravity_exactly() {
     assert_eq!(m.gravity.as_slice(), &[0.0, 0.0, -9.81]);
     assert!(m.gravity.iter().all(|g| g.is_sign_positive() || *g != 0.0));
 }
+
+/// An identification file records the mount it was fitted on (the locks, the gravity):
+/// loading it from the file alone rebuilds the same model, and a model whose base is
+/// turned another way is refused, naming the locks to use.
+#[test]
+fn an_identification_file_keeps_its_mount() {
+    use admittance_dynamics::Identification;
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("hung_arm.urdf");
+    std::fs::write(&urdf, ARM).unwrap();
+    let load_file = |lock: &[(&str, f64)]| {
+        let options = UrdfOptions {
+            base: Some("mount".into()),
+            tip: Some("lower".into()),
+            lock: lock.iter().map(|(j, v)| (j.to_string(), *v)).collect(),
+            ..UrdfOptions::default()
+        };
+        Model::from_urdf_file_with(&urdf, &options).unwrap()
+    };
+    let tilted = load_file(&[("tilt", 0.7)]);
+    let path = dir.path().join("hung.ident.json");
+    Identification::from_model(tilted.clone())
+        .save(&path, &tilted, Default::default())
+        .unwrap();
+    let (_, again) = Identification::load_with_urdf(&path).unwrap();
+    assert_eq!(again.gravity, tilted.gravity);
+    assert_eq!(again.lock_options(), &[("tilt".to_string(), 0.7)]);
+    // The same arm (same fingerprint) under another tilt: refused, with the lock to give.
+    let upright = load_file(&[]);
+    assert_eq!(upright.fingerprint(), tilted.fingerprint());
+    let e = Identification::load(&path, &upright)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("gravity") && e.contains("tilt=0.7"), "{e}");
+    assert!(Identification::load(&path, &tilted).is_ok());
+    // A version 1 file (no gravity, no locks recorded) was fitted with (0, 0, -9.81) in the
+    // base's axes: refused for the hung arm, taken for the same chain from the root.
+    let old = version_1(&path, dir.path().join("old.ident.json"));
+    let e = Identification::load(&old, &tilted).unwrap_err().to_string();
+    assert!(e.contains("predates"), "{e}");
+    let from_root = Model::from_urdf_file_with(
+        &urdf,
+        &UrdfOptions {
+            tip: Some("lower".into()),
+            ..UrdfOptions::default()
+        },
+    )
+    .unwrap();
+    let root_path = dir.path().join("root.ident.json");
+    Identification::from_model(from_root.clone())
+        .save(&root_path, &from_root, Default::default())
+        .unwrap();
+    let old_root = version_1(&root_path, dir.path().join("old_root.ident.json"));
+    assert!(Identification::load(&old_root, &from_root).is_ok());
+}
+
+/// The identification file at `path` rewritten as version 1 wrote it (no `gravity` or
+/// `lock`), checksum included, at `to`.
+fn version_1(path: &std::path::Path, to: std::path::PathBuf) -> std::path::PathBuf {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let payload = v["payload"].as_object_mut().unwrap();
+    payload.remove("gravity");
+    payload.remove("lock");
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in v["payload"].to_string().bytes() {
+        h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    v["checksum"] = format!("{h:016x}").into();
+    v["format_version"] = 1.into();
+    std::fs::write(&to, v.to_string()).unwrap();
+    to
+}
