@@ -40,15 +40,28 @@ pub(super) fn mount(
         link = tree.joints[j].parent;
     }
     above_base.reverse();
+    let given = |name: &str| {
+        options
+            .lock
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+    };
     let mut pose = Transform::identity();
     for &j in &above_base {
         let joint = &tree.joints[j];
-        let value = options
-            .lock
-            .iter()
-            .find(|(name, _)| name == joint.name)
-            .map_or(0.0, |(_, v)| *v);
-        pose = pose.compose(&placement_at(ctx, joint, value)?);
+        // As a locked branch's joints are held (fold.rs): the position given, else a mimic
+        // joint follows its reference's given position, else 0.
+        let mut value = given(joint.name);
+        if let (None, Some(mimic)) = (value, joint.mimic) {
+            if let Some(reference) = joint.mimic_target().and_then(given) {
+                let element = format!("joint '{}' <mimic>", joint.name);
+                let multiplier = ctx.number(mimic, &element, "multiplier")?.unwrap_or(1.0);
+                let offset = ctx.number(mimic, &element, "offset")?.unwrap_or(0.0);
+                value = Some(multiplier * reference + offset);
+            }
+        }
+        pose = pose.compose(&placement_at(ctx, joint, value.unwrap_or(0.0))?);
     }
     let world = Vector3::new(0.0, 0.0, -STANDARD_GRAVITY);
     // A signed zero from a turn about the vertical (sin 0 = 0 with a sign) would change no

@@ -169,3 +169,41 @@ fn version_1(path: &std::path::Path, to: std::path::PathBuf) -> std::path::PathB
     std::fs::write(&to, v.to_string()).unwrap();
     to
 }
+
+/// A mimic joint above the base follows its reference's lock position, as a locked
+/// branch's mimic joints do.
+#[test]
+fn a_mimic_joint_above_the_base_follows_its_reference() {
+    let text = ARM.replace(
+        r#"<joint name="hang" type="fixed">
+    <parent link="hanger"/><child link="mount"/>"#,
+        r#"<link name="swivel"/>
+  <joint name="follower" type="revolute">
+    <parent link="hanger"/><child link="swivel"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="100" velocity="1"/>
+    <mimic joint="tilt" multiplier="2" offset="0.1"/>
+  </joint>
+  <joint name="hang" type="fixed">
+    <parent link="swivel"/><child link="mount"/>"#,
+    );
+    assert!(text.contains("follower"));
+    let gravity = |lock: &[(&str, f64)]| {
+        let options = UrdfOptions {
+            base: Some("mount".into()),
+            tip: Some("lower".into()),
+            lock: lock.iter().map(|(j, v)| (j.to_string(), *v)).collect(),
+            ..UrdfOptions::default()
+        };
+        Model::from_urdf_str_with(&text, "mimic.urdf", &options)
+            .unwrap()
+            .gravity
+    };
+    let followed = gravity(&[("tilt", 0.3)]);
+    let explicit = gravity(&[("tilt", 0.3), ("follower", 0.7)]);
+    assert!(
+        (followed - explicit).norm() < 1e-15,
+        "{followed} {explicit}"
+    );
+    let unfollowed = gravity(&[("tilt", 0.3), ("follower", 0.0)]);
+    assert!((followed - unfollowed).norm() > 1.0);
+}
