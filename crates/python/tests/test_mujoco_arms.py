@@ -89,6 +89,37 @@ def test_your_own_urdf_through_the_command_line(tmp_path):
     assert obs["momentum_identified"]["free_false_torque_rms"] < 0.5 * obs["momentum_urdf"]["free_false_torque_rms"], obs
 
 
+def test_a_urdf_without_effort_limits_is_recorded(tmp_path):
+    """A URDF whose joints state no effort limit (effort="0"): the recording's PD bounds its
+    torque by the effort the plant's friction rule assumes for them (87 N m), instead of
+    refusing the arm; joints with a limit keep theirs."""
+    import xml.etree.ElementTree as ET
+
+    import numpy as np
+
+    import admittance as adm
+    from admittance.mujoco._arms import ARMS, recording_gains, robots_dir
+    from admittance.mujoco._plant import FR3_LARGE, unknown_joint_terms
+
+    source = robots_dir() / ARMS["so101"][0]
+    first = adm.Model.from_urdf(str(source)).joint_names[0]
+    root = ET.fromstring(source.read_text())
+    next(j for j in root.findall("joint") if j.get("name") == first).find("limit").set("effort", "0")
+    urdf = tmp_path / "no_effort.urdf"
+    urdf.write_text(ET.tostring(root, encoding="unicode"))
+    m = adm.Model.from_urdf(str(urdf))
+    effort = np.asarray(m.effort_limit)
+    assert effort[0] == 0 and np.all(effort[1:] > 0)
+    q = np.zeros(m.n)
+    gains = recording_gains(m, q, unknown_joint_terms(m.effort_limit))
+    assert gains["safe_hold"]["effort_limits"] == [FR3_LARGE["effort"], *effort[1:].tolist()]
+    ctl = adm.PdController(m, gains)  # refused without the bound
+    zeros = np.zeros(m.n)
+    assert np.all(np.isfinite(ctl.step(0.0, q, zeros, q, zeros, zeros, zeros, 0.001)))
+    with pytest.raises(ValueError, match="effort"):
+        adm.PdController(m, {k: v for k, v in gains.items() if k != "safe_hold"})
+
+
 @pytest.mark.parametrize("rpy", ["0 0 0", "3.141592653589793 0 0.3", "1.5707963267948966 0.2 0"])
 def test_a_turned_mount_gives_mujocos_gravity(tmp_path, rpy):
     """An arm hung from a ceiling or a wall in a larger URDF (the base link turned against the

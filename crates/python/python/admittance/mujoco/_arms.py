@@ -50,7 +50,7 @@ import admittance as adm
 from admittance import _progress
 
 from ._cosim import Sensors
-from ._plant import MujocoArm
+from ._plant import FR3_LARGE, MujocoArm
 
 #: The single-arm descriptions of example-robot-data 6.0.0 (path under ``robots/``, base,
 #: tip; ``None``: the URDF's root and the tip ``Model.from_urdf`` finds).
@@ -170,7 +170,14 @@ def recording_gains(m, q, terms):
     or fit knows the armature), ``Kp = 10 Kd``, nominal gravity."""
     inertia = np.diag(adm.crba(m, q)) + np.array([t["armature"] for t in terms])
     kd = np.maximum(20.0 * inertia, 0.05)
-    return {"kp": (10.0 * kd).tolist(), "kd": kd.tolist(), "gravity_compensation": True}
+    gains = {"kp": (10.0 * kd).tolist(), "kd": kd.tolist(), "gravity_compensation": True}
+    effort = np.asarray(m.effort_limit, dtype=float)
+    usable = np.isfinite(effort) & (effort > 0)
+    if not usable.all():
+        # A URDF without an effort limit (effort="0", no <limit>): the safe hold bounds the
+        # torque by the effort the plant's friction rule assumes for such a joint.
+        gains["safe_hold"] = {"effort_limits": np.where(usable, effort, FR3_LARGE["effort"]).tolist()}
+    return gains
 
 
 def push_schedule(cfg, m, duration, rng):
