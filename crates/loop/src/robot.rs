@@ -287,13 +287,11 @@ impl RobotLoop {
             .sample_time
             .iter()
             .any(|&t| input.time - t > half_period);
-        // A NaN (a refused or missing angle) compares false: not counted.
-        let outside_training_range = self
-            .closed_loop
-            .observer_training_range()
-            .iter()
-            .zip(&self.q_in)
-            .any(|([low, high], &q)| q < *low || q > *high);
+        // A NaN (a refused or missing angle) is not counted.
+        let outside_training_range = admittance_dynamics::outside_training_range(
+            self.closed_loop.observer_training_range(),
+            &self.q_in,
+        );
         let mut status = RobotStatus {
             controller_fault: None,
             observer_fault: false,

@@ -584,7 +584,8 @@ fn an_angle_outside_the_identifications_training_range_is_flagged() {
         for k in 0..3000 {
             let (q, tau) = motion(&model, &mut data, k);
             let s = step_measured(&mut l, k, &q, &tau);
-            let outside = (q[3] - POSE[3]).abs() > 0.05;
+            // Beyond the range by more than the margin, 2 % of its 0.1 rad span.
+            let outside = (q[3] - POSE[3]).abs() - 0.05 > 0.02 * 0.1;
             if joint3_only {
                 assert_eq!(s.outside_training_range, outside, "step {k}");
             }

@@ -216,8 +216,9 @@ pub fn load_identification(
 #[pymethods]
 impl PyIdentification {
     /// Per joint, how the positions `q` (`(n,)` or `(N, n)`, conditioned as the
-    /// identification was) leave `summary["training_range"]`: a list of dicts with
-    /// `samples_outside`, `furthest` (how far beyond, rad or m), `lowest` and `highest`;
+    /// identification was) leave `summary["training_range"]` by more than 2 % of its span:
+    /// a list of dicts with `samples_outside`, `furthest` (how far beyond, rad or m),
+    /// `lowest` and `highest`;
     /// empty when the identification records no range.
     fn range_excursions<'py>(
         &self,

@@ -46,7 +46,9 @@ pub use joint_terms::JointTerms;
 pub use payload::identify_payload;
 pub use samples::Samples;
 pub use settings::IdentificationSettings;
-pub use training_range::RangeExcursion;
+pub use training_range::{
+    beyond_training_range, outside_training_range, RangeExcursion, TRAINING_RANGE_MARGIN,
+};
 
 use serde::{Deserialize, Serialize};
 

@@ -5,6 +5,30 @@
 
 use crate::identification::{Identification, Samples};
 
+/// How far beyond its training range a position may lie before it counts as outside, as a
+/// share of the range's span: positions that close to the fitted ones are checked by
+/// them (a second excitation of the same envelope leaves it by 1e-4 rad), so only motion
+/// that really extrapolates is flagged.
+pub const TRAINING_RANGE_MARGIN: f64 = 0.02;
+
+/// How far `x` lies beyond `range` (rad or m; 0 inside); it counts as outside when that is
+/// more than [`TRAINING_RANGE_MARGIN`] of the span.
+#[inline]
+pub fn beyond_training_range([low, high]: [f64; 2], x: f64) -> (f64, bool) {
+    let beyond = (low - x).max(x - high).max(0.0);
+    (beyond, beyond > TRAINING_RANGE_MARGIN * (high - low))
+}
+
+/// Whether any joint's position `q` is outside its training range (beyond the margin);
+/// false for an empty range (none recorded) and for NaN. Allocation-free.
+#[inline]
+pub fn outside_training_range(range: &[[f64; 2]], q: &[f64]) -> bool {
+    range
+        .iter()
+        .zip(q)
+        .any(|(r, &x)| beyond_training_range(*r, x).1)
+}
+
 /// How one joint's positions in other motion leave the training range.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RangeExcursion {
@@ -33,7 +57,7 @@ pub(crate) fn training_range(samples: &Samples) -> Vec<[f64; 2]> {
 
 impl Identification {
     /// Per joint, how the positions `q` (row-major, one row of `n` per sample) leave the
-    /// summary's `training_range`; empty when the identification records none (files
+    /// summary's `training_range` by more than [`TRAINING_RANGE_MARGIN`] of its span; empty when the identification records none (files
     /// written before it was recorded, or `from_model`) or `q` is not whole rows.
     pub fn range_excursions(&self, q: &[f64]) -> Vec<RangeExcursion> {
         let range = &self.summary.training_range;
@@ -50,11 +74,11 @@ impl Identification {
             n
         ];
         for row in q.chunks_exact(n) {
-            for ((e, [low, high]), &x) in out.iter_mut().zip(range).zip(row) {
+            for ((e, r), &x) in out.iter_mut().zip(range).zip(row) {
                 e.lowest = e.lowest.min(x);
                 e.highest = e.highest.max(x);
-                let beyond = (low - x).max(x - high);
-                if beyond > 0.0 {
+                let (beyond, outside) = beyond_training_range(*r, x);
+                if outside {
                     e.samples_outside += 1;
                     e.furthest = e.furthest.max(beyond);
                 }
@@ -112,6 +136,19 @@ mod tests {
         assert!((e[0].furthest - 0.5).abs() < 1e-15);
         assert_eq!((e[0].lowest, e[0].highest), (-0.7, 0.5));
         assert_eq!(e[1].samples_outside, 0);
+        // Within the margin (2 % of joint 0's 0.5 rad span, 0.01 rad): not outside.
+        let near = [0.3 + 0.009, 0.0, -0.2 - 0.011, 0.0];
+        let e = ident.range_excursions(&near);
+        assert_eq!(e[0].samples_outside, 1);
+        assert!((e[0].furthest - 0.011).abs() < 1e-12);
+        assert!(!outside_training_range(
+            &ident.summary.training_range,
+            &near[..2]
+        ));
+        assert!(outside_training_range(
+            &ident.summary.training_range,
+            &near[2..]
+        ));
         // Not whole rows: nothing.
         assert!(ident.range_excursions(&other[..5]).is_empty());
     }
