@@ -83,7 +83,8 @@ def _rename_inner_world(root):
     """MuJoCo takes a link named ``world`` as its own world body wherever it sits in the tree:
     below a turned mount (an arm's file wrapped in a workcell's) that would drop the mount and
     simulate the arm upright. Such a link that is not the root is renamed ``world_link``
-    (never the chain's base or tip: those are the arm's own links)."""
+    (joints refer to it by name only, and the caller has already used the base's and tip's
+    names)."""
     children = {j.find("child").get("link") for j in root.findall("joint")}
     if "world" not in children:
         return
