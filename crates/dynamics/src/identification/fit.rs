@@ -7,6 +7,7 @@ use nalgebra::DVector;
 use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
 use crate::error::DynamicsError;
 use crate::identification::base::BaseParameters;
+use crate::identification::constrained::BodyExtent;
 use crate::identification::held_out::{best_of, errors_by_gain, Fitter, Held, Signals};
 use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
 use crate::identification::normal::{accumulate, columns, solve, JointSums, Normal, NormalParts};
@@ -105,11 +106,6 @@ pub fn identify(
             active[joint_column(n, i, f)] = false;
         }
     }
-    let fitter = Fitter {
-        physical: settings.physical_consistency,
-        plain: false,
-        bodies: n,
-    };
     let gains: Vec<f64> = match settings.acceleration_gain {
         Some(g) => vec![g],
         None => GAIN_GRID.to_vec(),
@@ -126,6 +122,16 @@ pub fn identify(
     let (prior_scale, prior) = match prior_scale(model, train, &urdf_train, width)? {
         Some(s) => (s, scaled(&urdf, s, n)),
         None => (1.0, urdf.clone()),
+    };
+    let extents = match settings.max_mass_ratio {
+        Some(ratio) if settings.physical_consistency => body_extents(model, &prior, ratio),
+        _ => Vec::new(),
+    };
+    let fitter = Fitter {
+        physical: settings.physical_consistency,
+        extents: &extents,
+        plain: false,
+        bodies: n,
     };
     let choose_ridge = |active: &[bool], signals: &Signals| {
         let ridge = RidgeChoice {
@@ -319,6 +325,7 @@ fn choose_delay(
 ) -> Signals {
     let plain = Fitter {
         physical: false,
+        extents: &[],
         plain: true,
         bodies: n,
     };
@@ -353,7 +360,7 @@ struct RidgeChoice {
 fn ridge_for(
     choice: RidgeChoice,
     held: &Held<'_>,
-    fitter: Fitter,
+    fitter: Fitter<'_>,
     active: &[bool],
     prior: &DVector<f64>,
     signals: &Signals,
@@ -458,6 +465,52 @@ fn joint_weights(
         .iter()
         .map(|r| 1.0 / r.max(1e-3 * largest).max(1e-12))
         .collect())
+}
+
+/// How far beyond the prior's size a body's mass may spread: its rms distance from the
+/// joint at most this many times the larger of the prior's and the next joint's distance.
+const EXTENT_SIZE_FACTOR: f64 = 2.0;
+/// A body may gain this share of the whole arm's prior mass beyond `max_mass_ratio` times
+/// its own, so that a link the URDF gives next to nothing can still take a real mass.
+const EXTENT_ARM_SHARE: f64 = 0.05;
+/// The smallest radius (m) of a body's sphere.
+const EXTENT_MIN_RADIUS: f64 = 0.02;
+
+/// Each body's extent (`IdentificationSettings::max_mass_ratio`): mass at most `ratio`
+/// times the prior's plus [`EXTENT_ARM_SHARE`] of the arm's, within a sphere about the
+/// joint [`EXTENT_SIZE_FACTOR`] times the body's size. The prior is strictly inside both.
+fn body_extents(model: &Model, prior: &DVector<f64>, ratio: f64) -> Vec<BodyExtent> {
+    let n = model.nq();
+    let body = |b: usize| {
+        let mut p = [0.0; PARAMETERS_PER_BODY];
+        p.copy_from_slice(
+            &prior.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
+        );
+        crate::spatial::Inertia::from_parameters(&p)
+    };
+    let arm: f64 = (0..n).map(|b| body(b).mass.max(0.0)).sum();
+    (0..n)
+        .map(|b| {
+            let inertia = body(b);
+            // The mean square distance of the mass from the joint, tr(I_o) / (2 m).
+            let spread = if inertia.mass > 0.0 {
+                (0.5 * inertia.rotational.trace() / inertia.mass)
+                    .max(0.0)
+                    .sqrt()
+            } else {
+                0.0
+            };
+            let next = model
+                .joints
+                .get(b + 1)
+                .map_or(0.0, |j| j.placement.translation.norm());
+            BodyExtent {
+                max_mass: ratio * inertia.mass.max(0.0) + EXTENT_ARM_SHARE * arm,
+                centre: [0.0; 3],
+                radius: EXTENT_SIZE_FACTOR * spread.max(next).max(EXTENT_MIN_RADIUS),
+            }
+        })
+        .collect()
 }
 
 fn body_possible(x: &DVector<f64>, b: usize) -> bool {

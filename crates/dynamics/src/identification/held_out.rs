@@ -5,7 +5,7 @@
 use nalgebra::DVector;
 
 use crate::error::DynamicsError;
-use crate::identification::constrained::solve_physical;
+use crate::identification::constrained::{solve_physical, BodyExtent};
 use crate::identification::normal::{shifted_torque, solve, Normal, NormalParts};
 use crate::identification::samples::Samples;
 use crate::identification::Identification;
@@ -31,15 +31,17 @@ pub(super) type Signals = Vec<usize>;
 /// The least-squares solution on `normal` with these columns and ridge: physical joint
 /// terms always, physically possible bodies when `physical`.
 #[derive(Clone, Copy)]
-pub(super) struct Fitter {
+pub(super) struct Fitter<'a> {
     pub physical: bool,
+    /// Where each body's mass may be, with `physical` (empty: anywhere possible).
+    pub extents: &'a [BodyExtent],
     /// Unconstrained ridge least squares (one factorisation): for choices that physics
     /// does not bear on.
     pub plain: bool,
     pub bodies: usize,
 }
 
-impl Fitter {
+impl Fitter<'_> {
     pub fn fit(
         &self,
         normal: &Normal,
@@ -50,7 +52,15 @@ impl Fitter {
         if self.plain {
             solve(normal, active, prior, ridge)
         } else {
-            solve_physical(normal, active, prior, ridge, self.bodies, self.physical)
+            solve_physical(
+                normal,
+                active,
+                prior,
+                ridge,
+                self.bodies,
+                self.physical,
+                self.extents,
+            )
         }
     }
 }
@@ -59,7 +69,7 @@ impl Held<'_> {
     /// Mean squared error on held-out motion of the fit with these columns, ridge and signals.
     pub fn score(
         &self,
-        fitter: Fitter,
+        fitter: Fitter<'_>,
         active: &[bool],
         prior: &DVector<f64>,
         ridge: f64,

@@ -33,6 +33,13 @@ pub struct IdentificationSettings {
     /// Fit over physically possible bodies only (positive mass, positive definite inertia
     /// obeying the triangle inequalities: log-Cholesky coordinates). Default true.
     pub physical_consistency: bool,
+    /// With `physical_consistency`, how heavy and how large a body may be: its mass at most
+    /// this many times the prior's (the URDF's, at the torque's size) plus a twentieth of
+    /// the arm's, and spread no farther than twice the link's size from its joint (docs/
+    /// method.md section 8); `None`: no bound. Default 2 (files written before the setting
+    /// existed read as `None`, as they were fitted).
+    #[serde(default = "no_bound")]
+    pub max_mass_ratio: Option<f64>,
     /// How much of the measured acceleration the prediction trusts (0 to 1); `None`
     /// (default): chosen on held-out motion (see `IdentificationSummary::acceleration_gain`).
     pub acceleration_gain: Option<f64>,
@@ -52,6 +59,7 @@ impl Default for IdentificationSettings {
             ridge: None,
             ridge_tolerance: 0.0,
             physical_consistency: true,
+            max_mass_ratio: Some(2.0),
             acceleration_gain: None,
             sample_rate_hz: None,
         }
@@ -98,6 +106,14 @@ impl IdentificationSettings {
                 ),
             );
         }
+        if let Some(r) = self.max_mass_ratio {
+            if !(r.is_finite() && r >= 1.0) {
+                return bad(
+                    "max_mass_ratio",
+                    format!("is {r}, must be at least 1 (or absent: no bound; default 2)"),
+                );
+            }
+        }
         if let Some(g) = self.acceleration_gain {
             if !(0.0..=1.0).contains(&g) {
                 return bad(
@@ -124,8 +140,36 @@ impl IdentificationSettings {
     }
 }
 
+/// What a file without `max_mass_ratio` was fitted with: no bound.
+fn no_bound() -> Option<f64> {
+    None
+}
+
 /// Whether a setting is at its default of 0 (left out of the files, so that files written
 /// before the setting existed read back the same).
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A settings record written before `max_mass_ratio` existed reads as no bound (how it
+    /// was fitted); a new one carries the default bound.
+    #[test]
+    fn older_settings_read_without_the_mass_bound() {
+        let mut value = serde_json::to_value(IdentificationSettings::default()).unwrap();
+        assert_eq!(value["max_mass_ratio"], serde_json::json!(2.0));
+        value.as_object_mut().unwrap().remove("max_mass_ratio");
+        let old: IdentificationSettings = serde_json::from_value(value).unwrap();
+        assert_eq!(old.max_mass_ratio, None);
+        assert_eq!(
+            old,
+            IdentificationSettings {
+                max_mass_ratio: None,
+                ..Default::default()
+            }
+        );
+    }
 }

@@ -38,7 +38,7 @@ pub(super) fn choose_springs(
     train: &Samples,
     width: f64,
     held: &Held<'_>,
-    fitter: Fitter,
+    fitter: Fitter<'_>,
     prior: &DVector<f64>,
     signals: &Signals,
     choice: &mut Choice,

@@ -267,6 +267,15 @@ fn bad_samples_and_settings_are_named() {
     };
     let e = identify(&urdf, &train, None, &bad).unwrap_err().to_string();
     assert!(e.contains("folds"), "{e}");
+    let bad = IdentificationSettings {
+        max_mass_ratio: Some(0.5),
+        ..Default::default()
+    };
+    let e = identify(&urdf, &train, None, &bad).unwrap_err().to_string();
+    assert!(
+        e.contains("max_mass_ratio") && e.contains("at least 1"),
+        "{e}"
+    );
     // No torque recorded (a missing column read as zeros): refused, not a massless arm.
     let zeros = vec![0.0; q.len()];
     let e = identify(
