@@ -297,6 +297,19 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         arm.nq(), s.training_samples, s.held_out, s.ridge, s.base_parameters, s.condition_number,
         s.projected_bodies, "joint", "URDF", "identified", "springs", "positions trained on"
     );
+    if !s.bodies_at_extent.is_empty() {
+        let names: Vec<&str> = s
+            .bodies_at_extent
+            .iter()
+            .filter_map(|&b| arm.joints.get(b).map(|j| j.child_link.as_str()))
+            .collect();
+        text = format!(
+            "bodies held at the arm's size (at most {} times the URDF's mass, within twice its \
+             size): {names:?}: the data wanted them heavier or farther out, a torque the model \
+             lacks (a spring, cables) or URDF masses that are off\n{text}",
+            s.settings.max_mass_ratio.unwrap_or(f64::NAN)
+        );
+    }
     if s.prior_scale != 1.0 {
         text = format!(
             "the torque is {:.3} times what the URDF's arm needs (a torque constant, gear ratio, unit or \

@@ -134,6 +134,66 @@ fn identify_then_evaluate_on_other_motion() {
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
 }
 
+/// The real Baxter's first 60 s at 4 Hz: the shoulder's gravity-assist spring (not taken
+/// on those 60 s) pushes links against their size; `identify` names them and the file
+/// lists them, every mass within its bound.
+#[test]
+fn real_baxter_links_held_at_the_arms_size_are_named() {
+    let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {
+        eprintln!("skipped: ADMITTANCE_DATA is not set (the folder holding baxter_rand/)");
+        return;
+    };
+    let data = PathBuf::from(dir).join("baxter_rand/baxter_rand.csv");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("baxter60.ident.json");
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let r = admittance(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--until",
+        "60",
+        "--input-filter-hz",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", text(&r));
+    let printed = text(&r);
+    let line = printed
+        .lines()
+        .find(|l| l.starts_with("bodies held at the arm's size"))
+        .unwrap_or_else(|| panic!("no line naming held bodies in\n{printed}"));
+    assert!(line.contains("\"left_lower_shoulder\""), "{line}");
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let summary = &file["payload"]["summary"];
+    assert_eq!(
+        summary["settings"]["max_mass_ratio"],
+        serde_json::json!(2.0)
+    );
+    let held = summary["bodies_at_extent"].as_array().unwrap();
+    assert!(held.contains(&serde_json::json!(1)), "{held:?}");
+    let masses: Vec<f64> = file["payload"]["inertial_parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .step_by(10)
+        .map(|m| m.as_f64().unwrap())
+        .collect();
+    // Baxter's URDF: 5.70, 3.23, 4.31, 2.07, 2.25, 1.61, 0.54 kg (19.7 in all); the torque
+    // reads 1.035 times the URDF's, so the bound is 1.035 (2 m + 0.05 * 19.7).
+    let urdf_mass = [5.70, 3.23, 4.31, 2.07, 2.25, 1.61, 0.54];
+    for (b, (m, u)) in masses.iter().zip(urdf_mass).enumerate() {
+        assert!(
+            *m <= 1.04 * (2.0 * u + 0.05 * 19.7) + 0.02,
+            "body {b}: {m} kg"
+        );
+    }
+}
+
 #[test]
 fn real_baxter_held_out_meets_the_bar() {
     let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {

@@ -77,6 +77,26 @@ pub(crate) struct BodyExtent {
     pub radius: f64,
 }
 
+impl BodyExtent {
+    /// Whether the body `p` (ten inertial parameters) ended at this extent: its mass within
+    /// 1 % of the bound, or its mass's rms distance from the centre within 1 % of the radius.
+    /// A body emptied to next to no mass (under 1 % of the bound) is not counted: the sphere
+    /// then only holds the cone's margin, it is not what the data pushed against.
+    pub(crate) fn reached(&self, p: &[f64; PARAMETERS_PER_BODY]) -> bool {
+        let j = pseudo_inertia_of(p);
+        let m = j[(3, 3)];
+        if !(m > 0.01 * self.max_mass) {
+            return false;
+        }
+        let c = Vector3::from(self.centre);
+        // The mean square distance from c: (tr Sigma - 2 h.c + m |c|^2) / m.
+        let h = Vector3::new(j[(0, 3)], j[(1, 3)], j[(2, 3)]);
+        let trace = j[(0, 0)] + j[(1, 1)] + j[(2, 2)];
+        let spread = (trace - 2.0 * h.dot(&c) + m * c.norm_squared()) / m;
+        m >= 0.99 * self.max_mass || spread >= 0.99 * 0.99 * self.radius * self.radius
+    }
+}
+
 /// An affine bound on one body's parameters, `sum coef * x[col] + constant > 0`.
 struct ExtentRow {
     /// The body (index into `Set::bodies`).
@@ -520,6 +540,17 @@ mod tests {
         let spread = 0.5 * body.rotational.trace() / body.mass;
         assert!(spread <= 0.09 && spread > 0.085, "spread {spread}");
         assert!((body.first_moment / body.mass).norm() <= 0.3);
+        assert!(extent.reached(&p));
+        // Inside it, or emptied to next to no mass (the sphere then holds only the cone's
+        // margin): not reached.
+        let prior_body: [f64; PARAMETERS_PER_BODY] = std::array::from_fn(|k| prior[k]);
+        assert!(!extent.reached(&prior_body));
+        let emptied = Inertia {
+            mass: 1e-4,
+            first_moment: nalgebra::Vector3::zeros(),
+            rotational: nalgebra::Matrix3::identity() * 1e-5,
+        };
+        assert!(!extent.reached(&emptied.to_parameters()));
         // Worse than the unbounded fit on these data, as it must be, and no feasible
         // neighbour is better.
         let cost = |x: &DVector<f64>| normal.squared_error(x);

@@ -188,6 +188,18 @@ pub fn identify(
         Ok((x, impossible))
     };
     let (x, projected) = fit(&held.all_training(&signals))?;
+    let at_extent: Vec<usize> = extents
+        .iter()
+        .enumerate()
+        .filter(|&(b, e)| {
+            let mut p = [0.0; PARAMETERS_PER_BODY];
+            p.copy_from_slice(
+                &x.as_slice()[b * PARAMETERS_PER_BODY..(b + 1) * PARAMETERS_PER_BODY],
+            );
+            e.reached(&p)
+        })
+        .map(|(b, _)| b)
+        .collect();
     let identified = Identification::from_solution(model, &x, width)?;
     let refit = |normal: &Normal| {
         let (xb, _) = fit(normal)?;
@@ -218,6 +230,7 @@ pub fn identify(
         ridge,
         springs,
         projected_bodies: projected,
+        bodies_at_extent: at_extent,
         expected_false_torque_rms: per_joint,
         prior_false_torque_rms: prior_rms,
         base_parameters: base.rank(),

@@ -82,6 +82,12 @@ pub struct IdentificationSummary {
     /// Bodies that an unconstrained fit would have made physically impossible (the fit
     /// kept them possible): where the data and rigid-body physics disagree.
     pub projected_bodies: Vec<usize>,
+    /// Bodies that ended at their mass bound or sphere (`IdentificationSettings::
+    /// max_mass_ratio`): the data wanted them heavier or farther out than the arm's size, a
+    /// torque the model lacks (a spring, a cable) or a URDF whose masses are off. Absent in
+    /// older files: none listed.
+    #[serde(default)]
+    pub bodies_at_extent: Vec<usize>,
     /// Expected false torque on motion not trained on, rms per joint (N m).
     pub expected_false_torque_rms: Vec<f64>,
     /// The URDF's own rms per joint on the same held-out motion (N m).
@@ -328,6 +334,7 @@ impl IdentificationSummary {
             ridge: 0.0,
             springs: vec![false; n],
             projected_bodies: Vec::new(),
+            bodies_at_extent: Vec::new(),
             expected_false_torque_rms: Vec::new(),
             prior_false_torque_rms: Vec::new(),
             base_parameters: 0,

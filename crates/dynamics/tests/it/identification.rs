@@ -432,3 +432,58 @@ fn recordings_that_cannot_be_the_urdfs_arm_are_refused() {
         "{e}"
     );
 }
+
+/// A torque the model cannot describe (a 40 N m gravity-assist spring on the shoulder,
+/// springs not offered) on a narrow motion: unbounded, the fit makes a link heavier than
+/// twice the URDF's to mimic it; bounded (the default) every body stays within its mass
+/// bound and the summary names the bodies held there.
+#[test]
+fn bodies_stay_the_arms_size_and_those_held_there_are_named() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.7, 30.0);
+    let mut terms = truth_terms(urdf.nq());
+    terms[1].spring = [0.0, 40.0, 0.0, 0.0];
+    let tau = torques(&urdf, &terms, &q, &qd, &qdd);
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &qdd,
+        tau: &tau,
+        dof: urdf.nq(),
+    };
+    let settings = |ratio| IdentificationSettings {
+        springs: false,
+        max_mass_ratio: ratio,
+        ..Default::default()
+    };
+    let urdf_mass: Vec<f64> = urdf.bodies.iter().map(|b| b.mass).collect();
+    let arm: f64 = urdf_mass.iter().sum();
+    let over = |ident: &Identification| -> Vec<usize> {
+        let scale = ident.summary.prior_scale;
+        (0..urdf.nq())
+            .filter(|&b| {
+                ident.model.bodies[b].mass > scale * (2.0 * urdf_mass[b] + 0.05 * arm) * 1.0001
+            })
+            .collect()
+    };
+    let free = identify(&urdf, &train, None, &settings(None)).unwrap();
+    assert!(
+        !over(&free).is_empty(),
+        "{:?}",
+        free.model.bodies.iter().map(|b| b.mass).collect::<Vec<_>>()
+    );
+    assert!(free.summary.bodies_at_extent.is_empty());
+    let bounded = identify(&urdf, &train, None, &settings(Some(2.0))).unwrap();
+    assert!(
+        over(&bounded).is_empty(),
+        "{:?}",
+        bounded
+            .model
+            .bodies
+            .iter()
+            .map(|b| b.mass)
+            .collect::<Vec<_>>()
+    );
+    assert!(!bounded.summary.bodies_at_extent.is_empty());
+    assert!(bounded.joint_terms.iter().all(|t| t.is_physical()));
+}
