@@ -49,6 +49,10 @@ pub struct IdentifyArgs {
     /// Contiguous stretches for cross-validation (without --validation).
     #[arg(long, default_value_t = 5)]
     folds: usize,
+    /// Each link's mass at most R times the URDF's (plus a twentieth of the arm's) and
+    /// within twice its size (docs/method.md section 8); `none`: no bound.
+    #[arg(long, value_name = "R|none", default_value = "2", value_parser = mass_ratio)]
+    max_mass_ratio: MassRatio,
     /// Identification file to write (JSON): a new name or an identification file.
     #[arg(long)]
     out: PathBuf,
@@ -63,6 +67,22 @@ pub struct IdentifyArgs {
     /// No progress output on stderr.
     #[arg(long)]
     quiet: bool,
+}
+
+/// `--max-mass-ratio`: a ratio of at least 1, or no bound.
+#[derive(Clone, Copy, Debug)]
+struct MassRatio(Option<f64>);
+
+fn mass_ratio(text: &str) -> Result<MassRatio, String> {
+    if text.eq_ignore_ascii_case("none") {
+        return Ok(MassRatio(None));
+    }
+    match text.parse::<f64>() {
+        Ok(r) if r.is_finite() && r >= 1.0 => Ok(MassRatio(Some(r))),
+        _ => Err(format!(
+            "{text}: a ratio of at least 1 (times the URDF's mass), or none for no bound"
+        )),
+    }
 }
 
 /// The data's rows as identification samples, conditioned as at run time.
@@ -191,6 +211,7 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
         springs: !args.no_friction && !args.no_springs,
         coulomb_width: args.coulomb_width,
         folds: args.folds,
+        max_mass_ratio: args.max_mass_ratio.0,
         ..Default::default()
     };
     for (path, recording) in [

@@ -124,9 +124,13 @@ fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<Free
 /// conditions q and tau as the observers do at run time (0: the columns as recorded);
 /// `None` (default): chosen on held-out motion among 4, 6 and 10 Hz and the columns as
 /// recorded. The choice, each joint's torque delay and the estimate's 90 % step-response
-/// time are in `summary` (`input_filter_hz`, `delay_s`, `step_response_s`).
+/// time are in `summary` (`input_filter_hz`, `delay_s`, `step_response_s`). Each body's
+/// mass stays at most `max_mass_ratio` times the URDF's (plus a twentieth of the arm's) and
+/// within twice its size (`None`: no bound); `summary["bodies_at_extent"]` names those held
+/// there.
 #[pyfunction]
-#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true))]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0)))]
+#[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
@@ -135,6 +139,7 @@ pub fn identify(
     validation: Option<&Bound<'_, PyAny>>,
     input_filter_hz: Option<f64>,
     springs: bool,
+    max_mass_ratio: Option<f64>,
 ) -> PyResult<PyIdentification> {
     if let Some(f) = input_filter_hz {
         if !(f.is_finite() && f >= 0.0) {
@@ -152,8 +157,12 @@ pub fn identify(
     let settings = IdentificationSettings {
         friction,
         springs: friction && springs,
+        max_mass_ratio,
         ..Default::default()
     };
+    settings
+        .validate()
+        .map_err(|e| value_error(e.to_string()))?;
     if validation.is_none() {
         let period =
             crate::free_motion::repeat_period_of_positions(&train.q, urdf.nq(), settings.folds);

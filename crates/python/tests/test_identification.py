@@ -246,3 +246,16 @@ def test_the_summary_records_the_training_range(baxter, truth_and_data):
     assert abs(e[2]["furthest"] - 0.3) < 1e-12 and e[2]["highest"] == moved[:, 2].max()
     with pytest.raises(ValueError):
         ident.range_excursions(q[:, :3])
+
+
+def test_the_mass_bound_is_a_setting_with_a_check(baxter, truth_and_data):
+    """`max_mass_ratio` reaches the fit (the summary records it; None lifts the bound) and a
+    ratio below 1 is refused by name before anything is fitted."""
+    _, data = truth_and_data
+    bounded = adm.identify(data, baxter, input_filter_hz=0.0)
+    assert bounded.summary["settings"]["max_mass_ratio"] == 2.0
+    assert bounded.summary["bodies_at_extent"] == []  # the URDF's own arm: nothing pushed
+    free = adm.identify(data, baxter, input_filter_hz=0.0, max_mass_ratio=None)
+    assert free.summary["settings"]["max_mass_ratio"] is None
+    with pytest.raises(ValueError, match="max_mass_ratio"):
+        adm.identify(data, baxter, input_filter_hz=0.0, max_mass_ratio=0.5)

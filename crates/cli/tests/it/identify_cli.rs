@@ -192,6 +192,28 @@ fn real_baxter_links_held_at_the_arms_size_are_named() {
             "body {b}: {m} kg"
         );
     }
+    // `--max-mass-ratio none` lifts the bound: nothing is held, and the file says so.
+    let free = tmp.path().join("free.ident.json");
+    let r = admittance(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--until",
+        "60",
+        "--input-filter-hz",
+        "4",
+        "--max-mass-ratio",
+        "none",
+        "--out",
+        free.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", text(&r));
+    assert!(!text(&r).contains("bodies held"), "{}", text(&r));
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&free).unwrap()).unwrap();
+    assert!(file["payload"]["summary"]["settings"]["max_mass_ratio"].is_null());
 }
 
 #[test]

@@ -689,11 +689,13 @@ def identify(
     m: Model,
     friction: bool = True,
     validation: Optional[FreeMotionData] = None,
-    input_filter_hz: float = 0.0,
+    input_filter_hz: Optional[float] = None,
     springs: bool = True,
+    max_mass_ratio: Optional[float] = 2.0,
 ) -> Identification:
     """Identifies the arm from free motion (``admittance identify``): settings chosen on
-    ``validation`` or by blocked cross-validation over contiguous stretches. Releases the GIL."""
+    ``validation`` or by blocked cross-validation over contiguous stretches; each body's mass
+    at most ``max_mass_ratio`` times the URDF's (``None``: no bound). Releases the GIL."""
 
 def excitation(
     m: Model,
