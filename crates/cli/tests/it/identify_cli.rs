@@ -134,41 +134,65 @@ fn identify_then_evaluate_on_other_motion() {
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
 }
 
-/// The real Baxter's first 60 s at 4 Hz: the shoulder's gravity-assist spring (not taken
-/// on those 60 s) pushes links against their size; `identify` names them and the file
-/// lists them, every mass within its bound.
-#[test]
-fn real_baxter_links_held_at_the_arms_size_are_named() {
+/// The real Baxter recording (`ADMITTANCE_DATA`), or `None` (the test is skipped).
+fn baxter_recording() -> Option<PathBuf> {
     let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {
         eprintln!("skipped: ADMITTANCE_DATA is not set (the folder holding baxter_rand/)");
-        return;
+        return None;
     };
     let data = PathBuf::from(dir).join("baxter_rand/baxter_rand.csv");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("baxter60.ident.json");
+    assert!(
+        data.exists(),
+        "ADMITTANCE_DATA is set but {} is missing",
+        data.display()
+    );
+    Some(data)
+}
+
+/// `admittance identify` on the real Baxter's rows before `until` s at 4 Hz, to `out`, with
+/// `extra` arguments; succeeds, and returns what it printed and the file.
+fn identify_baxter(
+    data: &Path,
+    until: &str,
+    extra: &[&str],
+    out: &Path,
+) -> (String, serde_json::Value) {
     let urdf = root().join("models/baxter_left_arm.urdf");
-    let r = admittance(&[
+    let mut args = vec![
         "identify",
         "--data",
         data.to_str().unwrap(),
         "--urdf",
         urdf.to_str().unwrap(),
         "--until",
-        "60",
+        until,
         "--input-filter-hz",
         "4",
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let r = admittance(&args);
     assert!(r.status.success(), "{}", text(&r));
-    let printed = text(&r);
+    let file = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
+    (text(&r), file)
+}
+
+/// The real Baxter's first 60 s at 4 Hz: the shoulder's gravity-assist spring (not taken
+/// on those 60 s) pushes links against their size; `identify` names them and the file
+/// lists them, every mass within its bound.
+#[test]
+fn real_baxter_links_held_at_the_arms_size_are_named() {
+    let Some(data) = baxter_recording() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let (printed, file) = identify_baxter(&data, "60", &[], &tmp.path().join("held.json"));
     let line = printed
         .lines()
         .find(|l| l.starts_with("bodies held at the arm's size"))
         .unwrap_or_else(|| panic!("no line naming held bodies in\n{printed}"));
     assert!(line.contains("\"left_lower_shoulder\""), "{line}");
-    let file: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let summary = &file["payload"]["summary"];
     assert_eq!(
         summary["settings"]["max_mass_ratio"],
@@ -193,63 +217,26 @@ fn real_baxter_links_held_at_the_arms_size_are_named() {
         );
     }
     // `--max-mass-ratio none` lifts the bound: nothing is held, and the file says so.
-    let free = tmp.path().join("free.ident.json");
-    let r = admittance(&[
-        "identify",
-        "--data",
-        data.to_str().unwrap(),
-        "--urdf",
-        urdf.to_str().unwrap(),
-        "--until",
-        "60",
-        "--input-filter-hz",
-        "4",
-        "--max-mass-ratio",
-        "none",
-        "--out",
-        free.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", text(&r));
-    assert!(!text(&r).contains("bodies held"), "{}", text(&r));
-    let file: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&free).unwrap()).unwrap();
+    let none = ["--max-mass-ratio", "none"];
+    let (printed, file) = identify_baxter(&data, "60", &none, &tmp.path().join("free.json"));
+    assert!(!printed.contains("bodies held"), "{printed}");
     assert!(file["payload"]["summary"]["settings"]["max_mass_ratio"].is_null());
 }
 
 #[test]
 fn real_baxter_held_out_meets_the_bar() {
-    let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {
-        eprintln!("skipped: ADMITTANCE_DATA is not set (the folder holding baxter_rand/)");
+    let Some(data) = baxter_recording() else {
         return;
     };
-    let data = PathBuf::from(dir).join("baxter_rand/baxter_rand.csv");
-    assert!(
-        data.exists(),
-        "ADMITTANCE_DATA is set but {} is missing",
-        data.display()
-    );
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("baxter.ident.json");
+    identify_baxter(&data, "120", &[], &out);
     let urdf = root().join("models/baxter_left_arm.urdf");
     let (d, u, o) = (
         data.to_str().unwrap(),
         urdf.to_str().unwrap(),
         out.to_str().unwrap(),
     );
-    let r = admittance(&[
-        "identify",
-        "--data",
-        d,
-        "--urdf",
-        u,
-        "--until",
-        "120",
-        "--input-filter-hz",
-        "4",
-        "--out",
-        o,
-    ]);
-    assert!(r.status.success(), "{}", text(&r));
     let r = admittance(&[
         "evaluate",
         "--data",

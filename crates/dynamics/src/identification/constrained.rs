@@ -493,6 +493,39 @@ mod tests {
         is_physically_consistent(&Inertia::from_parameters(&p)) && terms.is_physical()
     }
 
+    /// Random neighbours of `x` (each active column moved by up to 10^`decades` of its size)
+    /// that are `inside` cost no less than `x`, to the method's gap; returns how many were.
+    fn no_better_neighbour(
+        normal: &Normal,
+        x: &DVector<f64>,
+        active: &[bool],
+        inside: impl Fn(&DVector<f64>) -> bool,
+        seed: u64,
+        trials: usize,
+        decades: std::ops::Range<f64>,
+    ) -> usize {
+        let cost = |x: &DVector<f64>| normal.squared_error(x);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut tried = 0;
+        for _ in 0..trials {
+            let scale = 10f64.powf(rng.random_range(decades.clone()));
+            let mut y = x.clone();
+            for c in (0..P).filter(|&c| active[c]) {
+                y[c] += scale * rng.random_range(-1.0..1.0) * x[c].abs().max(1e-3);
+            }
+            if inside(&y) {
+                tried += 1;
+                assert!(
+                    cost(&y) >= cost(x) - 1e-7 * normal.yy,
+                    "{} < {}",
+                    cost(&y),
+                    cost(x)
+                );
+            }
+        }
+        tried
+    }
+
     #[test]
     fn a_physical_least_squares_solution_is_returned_as_it_is() {
         let mut truth = [0.0; P];
@@ -555,22 +588,13 @@ mod tests {
         // neighbour is better.
         let cost = |x: &DVector<f64>| normal.squared_error(x);
         assert!(cost(&x) > cost(&unbounded));
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let mut tried = 0;
-        for _ in 0..20000 {
-            let scale = 10f64.powf(rng.random_range(-7.0..-3.0));
-            let mut y = x.clone();
-            for c in (0..P).filter(|&c| active[c]) {
-                y[c] += scale * rng.random_range(-1.0..1.0) * x[c].abs().max(1e-3);
-            }
+        let inside = |y: &DVector<f64>| {
             let mut q = [0.0; PARAMETERS_PER_BODY];
             q.copy_from_slice(&y.as_slice()[..PARAMETERS_PER_BODY]);
             let b = Inertia::from_parameters(&q);
-            if physical(&y) && b.mass <= 2.5 && 0.5 * b.rotational.trace() <= 0.09 * b.mass {
-                tried += 1;
-                assert!(cost(&y) >= cost(&x) - 1e-7 * normal.yy);
-            }
-        }
+            physical(y) && b.mass <= 2.5 && 0.5 * b.rotational.trace() <= 0.09 * b.mass
+        };
+        let tried = no_better_neighbour(&normal, &x, &active, inside, 5, 20000, -7.0..-3.0);
         assert!(tried > 100, "only {tried} neighbours inside");
     }
 
@@ -590,25 +614,7 @@ mod tests {
         let x = solve_physical(&normal, &active, &prior, 1e-9, 1, true, &[]).unwrap();
         assert!(physical(&x), "{x}");
         // A convex problem: no possible point nearby is better (to the method's gap).
-        let cost = |x: &DVector<f64>| normal.squared_error(x);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let mut tried = 0;
-        for _ in 0..4000 {
-            let scale = 10f64.powf(rng.random_range(-6.0..-1.0));
-            let mut y = x.clone();
-            for c in (0..P).filter(|&c| active[c]) {
-                y[c] += scale * rng.random_range(-1.0..1.0) * x[c].abs().max(1e-3);
-            }
-            if physical(&y) {
-                tried += 1;
-                assert!(
-                    cost(&y) >= cost(&x) - 1e-7 * normal.yy,
-                    "{} < {}",
-                    cost(&y),
-                    cost(&x)
-                );
-            }
-        }
+        let tried = no_better_neighbour(&normal, &x, &active, physical, 3, 4000, -6.0..-1.0);
         assert!(tried > 100, "only {tried} possible neighbours");
     }
 }
