@@ -127,9 +127,10 @@ fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<Free
 /// time are in `summary` (`input_filter_hz`, `delay_s`, `step_response_s`). Each body's
 /// mass stays at most `max_mass_ratio` times the URDF's (plus a twentieth of the arm's) and
 /// within twice its size (`None`: no bound); `summary["bodies_at_extent"]` names those held
-/// there.
+/// there. `coulomb_width` is the narrower smooth sign's width `w` of the friction,
+/// `tanh(qdot / w)` (rad/s, `admittance identify --coulomb-width`).
 #[pyfunction]
-#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0)))]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0), coulomb_width=0.01))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -140,6 +141,7 @@ pub fn identify(
     input_filter_hz: Option<f64>,
     springs: bool,
     max_mass_ratio: Option<f64>,
+    coulomb_width: f64,
 ) -> PyResult<PyIdentification> {
     if let Some(f) = input_filter_hz {
         if !(f.is_finite() && f >= 0.0) {
@@ -158,6 +160,7 @@ pub fn identify(
         friction,
         springs: friction && springs,
         max_mass_ratio,
+        coulomb_width,
         ..Default::default()
     };
     settings

@@ -259,3 +259,16 @@ def test_the_mass_bound_is_a_setting_with_a_check(baxter, truth_and_data):
     assert free.summary["settings"]["max_mass_ratio"] is None
     with pytest.raises(ValueError, match="max_mass_ratio"):
         adm.identify(data, baxter, input_filter_hz=0.0, max_mass_ratio=0.5)
+
+
+def test_the_coulomb_width_is_a_setting_with_a_check(baxter, truth_and_data):
+    """`coulomb_width` reaches the fit (the summary and every joint's terms carry it) and a
+    width that is not positive is refused by name before anything is fitted."""
+    _, data = truth_and_data
+    ident = adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=0.005)
+    assert ident.summary["settings"]["coulomb_width"] == 0.005
+    assert [t["coulomb_width"] for t in ident.joint_terms] == [0.005] * baxter.n
+    assert adm.identify(data, baxter, input_filter_hz=0.0).summary["settings"]["coulomb_width"] == 0.01
+    for bad in (0.0, -0.01, float("nan")):
+        with pytest.raises(ValueError, match="coulomb_width"):
+            adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=bad)

@@ -692,10 +692,12 @@ def identify(
     input_filter_hz: Optional[float] = None,
     springs: bool = True,
     max_mass_ratio: Optional[float] = 2.0,
+    coulomb_width: float = 0.01,
 ) -> Identification:
     """Identifies the arm from free motion (``admittance identify``): settings chosen on
     ``validation`` or by blocked cross-validation over contiguous stretches; each body's mass
-    at most ``max_mass_ratio`` times the URDF's (``None``: no bound). Releases the GIL."""
+    at most ``max_mass_ratio`` times the URDF's (``None``: no bound); ``coulomb_width``: the
+    friction's narrower smooth sign ``tanh(qdot / w)`` (rad/s). Releases the GIL."""
 
 def excitation(
     m: Model,

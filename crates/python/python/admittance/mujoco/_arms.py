@@ -108,6 +108,8 @@ class ArmsConfig:
     dt: float = 1e-3
     sensor_cutoff_hz: float = 40.0
     input_filter_hz: float = 10.0
+    # The identification's Coulomb width (rad/s): the narrower smooth sign tanh(qdot / w).
+    coulomb_width: float = 0.01
     # The estimate's low-pass (Hz); 0: chosen per arm on the validation recording among
     # ESTIMATE_CUTOFFS_HZ (choose_estimate_cutoff).
     estimate_cutoff_hz: float = 0.0
@@ -359,7 +361,9 @@ def _run_arm(name, cfg, log, robots, stage):
 
     stage("identification")
     t0 = time.perf_counter()
-    ident = adm.identify(train, m, validation=valid, input_filter_hz=cfg.input_filter_hz)
+    ident = adm.identify(
+        train, m, validation=valid, input_filter_hz=cfg.input_filter_hz, coulomb_width=cfg.coulomb_width
+    )
     timings["identify"] = time.perf_counter() - t0
     stage(f"training 3 networks of {cfg.nodes} nodes")
     t0 = time.perf_counter()

@@ -3,6 +3,7 @@ on the MuJoCo plant, trained on 60 s of excitation, evaluated on other motion wi
 and in free motion (the module ``_arms`` says how; docs/experiments.md has the table)."""
 
 import argparse
+import math
 import sys
 
 import admittance as adm
@@ -27,6 +28,7 @@ def main(argv=None):
     p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0)
     p.add_argument("--input-filter-hz", type=float, default=10.0)
+    p.add_argument("--coulomb-width", type=float, default=0.01, help="the identification's Coulomb width w of tanh(qdot / w), rad/s (0.01)")
     p.add_argument("--estimate-cutoff-hz", type=float, default=0.0, help="the estimate's low-pass, Hz (0: chosen per arm on the validation recording among 5, 10, 20, 40)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
@@ -38,6 +40,8 @@ def main(argv=None):
     a = p.parse_args(argv)
     if a.jobs is not None and a.jobs < 1:
         p.error("--jobs must be at least 1")
+    if not (math.isfinite(a.coulomb_width) and a.coulomb_width > 0):
+        p.error(f"--coulomb-width {a.coulomb_width}: must be a positive width in rad/s (default 0.01)")
     if a.quiet:
         from admittance import _progress
 
@@ -80,7 +84,7 @@ def main(argv=None):
     cfg = ArmsConfig(
         out=a.out, arms=arms, training_duration=a.training_duration, evaluation_duration=a.evaluation_duration, validation_duration=a.validation_duration,
         nodes=a.nodes, push_force=a.push_force, friction_scale=a.friction_scale,
-        input_filter_hz=a.input_filter_hz, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed, urdf_arms=urdf_arms,
+        input_filter_hz=a.input_filter_hz, coulomb_width=a.coulomb_width, estimate_cutoff_hz=a.estimate_cutoff_hz, seed=a.seed, urdf_arms=urdf_arms,
     )
     from admittance import _progress
     from admittance.sweep import SweepError
