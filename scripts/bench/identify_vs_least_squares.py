@@ -50,7 +50,7 @@ import admittance as adm
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CUTOFFS_HZ = (0.0, 4.0, 10.0)
-COULOMB_WIDTH = 0.01  # rad/s, IdentificationSettings::default().coulomb_width
+COULOMB_WIDTH = 0.01  # rad/s, the plain fit's fixed width (identify chooses among COULOMB_WIDTH_CANDIDATES)
 RIDGE_REL = 1e-3
 JOINT_COLUMNS = 8  # q'', q', tanh(q'/w), tanh(q'/10w), 1, q, sin q, cos q
 

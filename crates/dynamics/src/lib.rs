@@ -55,9 +55,9 @@ pub use identification::{
     beyond_training_range, excitation, identify, identify_payload, is_physically_consistent,
     outside_training_range, BaseParameters, Excitation, ExcitationSettings, FourierSeries,
     Identification, IdentificationFile, IdentificationSettings, IdentificationSummary, JointTerms,
-    LimitUse, RangeExcursion, Samples, DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION,
-    DEFAULT_VELOCITY_LIMIT, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION,
-    TRAINING_RANGE_MARGIN,
+    LimitUse, RangeExcursion, Samples, COULOMB_WIDTH_CANDIDATES, DEFAULT_EXCITATION_RANGE,
+    DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT, IDENTIFICATION_FORMAT,
+    IDENTIFICATION_FORMAT_VERSION, TRAINING_RANGE_MARGIN,
 };
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,

@@ -128,9 +128,10 @@ fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<Free
 /// mass stays at most `max_mass_ratio` times the URDF's (plus a twentieth of the arm's) and
 /// within twice its size (`None`: no bound); `summary["bodies_at_extent"]` names those held
 /// there. `coulomb_width` is the narrower smooth sign's width `w` of the friction,
-/// `tanh(qdot / w)` (rad/s, `admittance identify --coulomb-width`).
+/// `tanh(qdot / w)` (rad/s, `admittance identify --coulomb-width`); `None` (default): chosen
+/// on held-out motion among `COULOMB_WIDTH_CANDIDATES` (each joint's terms carry it).
 #[pyfunction]
-#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0), coulomb_width=0.01))]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0), coulomb_width=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -141,7 +142,7 @@ pub fn identify(
     input_filter_hz: Option<f64>,
     springs: bool,
     max_mass_ratio: Option<f64>,
-    coulomb_width: f64,
+    coulomb_width: Option<f64>,
 ) -> PyResult<PyIdentification> {
     if let Some(f) = input_filter_hz {
         if !(f.is_finite() && f >= 0.0) {

@@ -45,6 +45,10 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "DEFAULT_SIGNAL_CUTOFF_HZ",
         admittance_loop::DEFAULT_SIGNAL_CUTOFF_HZ,
     )?;
+    m.add(
+        "COULOMB_WIDTH_CANDIDATES",
+        admittance_dynamics::COULOMB_WIDTH_CANDIDATES.to_vec(),
+    )?;
     m.add_class::<model::PyModel>()?;
     for f in [
         wrap_pyfunction!(model::rnea, m)?,

@@ -30,9 +30,9 @@ def multisine(m, seed, seconds, rate=200.0):
     return t, q, qd, qdd
 
 
-def torques(m, q, qd, qdd, friction):
+def torques(m, q, qd, qdd, friction, coulomb_width=0.01):
     tau = np.array([adm.rnea(m, a, b, c) for a, b, c in zip(q, qd, qdd)])
-    return tau + friction[0] * qd + friction[1] * np.tanh(qd / 0.01) + friction[2]
+    return tau + friction[0] * qd + friction[1] * np.tanh(qd / coulomb_width) + friction[2]
 
 
 @pytest.fixture(scope="module")
@@ -268,7 +268,23 @@ def test_the_coulomb_width_is_a_setting_with_a_check(baxter, truth_and_data):
     ident = adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=0.005)
     assert ident.summary["settings"]["coulomb_width"] == 0.005
     assert [t["coulomb_width"] for t in ident.joint_terms] == [0.005] * baxter.n
-    assert adm.identify(data, baxter, input_filter_hz=0.0).summary["settings"]["coulomb_width"] == 0.01
     for bad in (0.0, -0.01, float("nan")):
         with pytest.raises(ValueError, match="coulomb_width"):
             adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=bad)
+
+
+@pytest.mark.parametrize("truth_width", [0.003, 0.005, 0.01])
+def test_the_coulomb_width_is_chosen_on_held_out_motion(baxter, truth_and_data, truth_width):
+    """Left out, the width is chosen among COULOMB_WIDTH_CANDIDATES: the arm's own, when its
+    friction is one of them, and the fit predicts other motion better than at the wrong width."""
+    friction, data = truth_and_data
+    data = dict(data, tau=torques(baxter, data["q"], data["qdot"], data["qddot"], friction, truth_width))
+    assert truth_width in adm.COULOMB_WIDTH_CANDIDATES
+    chosen = adm.identify(data, baxter, input_filter_hz=0.0)
+    assert chosen.summary["settings"]["coulomb_width"] is None
+    assert [t["coulomb_width"] for t in chosen.joint_terms] == [truth_width] * baxter.n
+    _, q, qd, qdd = multisine(baxter, 7, 10.0)
+    truth = torques(baxter, q, qd, qdd, friction, truth_width)
+    other = adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=0.02)
+    chosen_err, other_err = (float(np.sqrt(np.mean((i.predict(q, qd, qdd) - truth) ** 2))) for i in (chosen, other))
+    assert chosen_err < other_err, (chosen_err, other_err)

@@ -1,14 +1,21 @@
 //! Where the identification's settings are scored: a separate recording, or blocked
 //! cross-validation over contiguous stretches of the training motion (docs/method.md
-//! section 1), and the held-out errors that choose the acceleration gain.
+//! section 1), from one pass over the samples at every candidate Coulomb width with the
+//! joints' weights, and the held-out errors that choose the acceleration gain.
 
 use nalgebra::DVector;
 
+use crate::algorithms::regressor::PARAMETERS_PER_BODY;
 use crate::error::DynamicsError;
 use crate::identification::constrained::{solve_physical, BodyExtent};
-use crate::identification::normal::{shifted_torque, solve, Normal, NormalParts};
+use crate::identification::joint_terms::{FIRST_SPRING_FEATURE, JOINT_FEATURES};
+use crate::identification::normal::{
+    accumulate, shifted_torque, solve, JointSums, Normal, NormalParts,
+};
 use crate::identification::samples::Samples;
+use crate::identification::settings::IdentificationSettings;
 use crate::identification::Identification;
+use crate::model::Model;
 use crate::parallel::parallel_map;
 
 /// Where settings are scored: a separate recording, or held-out contiguous stretches; the
@@ -111,6 +118,104 @@ impl Held<'_> {
             Held::Folds { total, .. } => total.at(signals),
         }
     }
+}
+
+/// The per-joint sums of the training motion and of where settings are scored (a validation
+/// recording, else the training's contiguous stretches): the normal equations at any
+/// candidate Coulomb width, with any joint weights.
+pub(super) struct HeldSums<'a> {
+    train: Vec<JointSums>,
+    validation: Option<(JointSums, Samples<'a>)>,
+    friction: bool,
+}
+
+impl<'a> HeldSums<'a> {
+    /// Where settings are scored, at the `width`-th candidate Coulomb width, each joint
+    /// weighted by one over its residual after a plain fit at that width (`joint_weights`).
+    pub fn at_width(&self, width: usize, prior: &DVector<f64>) -> Result<Held<'a>, DynamicsError> {
+        let total = JointSums::sum(&self.train);
+        let weights = joint_weights(&total, width, self.friction, prior)?;
+        Ok(self.weighted(width, &weights))
+    }
+
+    pub fn weighted(&self, width: usize, weights: &[f64]) -> Held<'a> {
+        let weighted = |s: &JointSums| s.weighted(weights, width);
+        match &self.validation {
+            Some((v, samples)) => Held::Recording {
+                train: weighted(&self.train[0]),
+                validation: weighted(v),
+                samples: *samples,
+            },
+            None => {
+                let blocks: Vec<NormalParts> = self.train.iter().map(weighted).collect();
+                let total = NormalParts::sum(&blocks);
+                Held::Folds { blocks, total }
+            }
+        }
+    }
+
+    pub fn widths(&self) -> usize {
+        self.train[0].widths()
+    }
+}
+
+/// One pass over the samples (per joint and stretch, in parallel) for [`HeldSums`].
+pub(super) fn held_sums<'a>(
+    model: &Model,
+    train: &Samples,
+    validation: Option<&Samples<'a>>,
+    settings: &IdentificationSettings,
+    shifts: &[f64],
+    widths: &[f64],
+) -> Result<HeldSums<'a>, DynamicsError> {
+    let stretches = |s: &Samples, blocks: usize| -> Result<Vec<JointSums>, DynamicsError> {
+        let ranges: Vec<(usize, usize)> = (0..blocks)
+            .map(|b| (b * s.len() / blocks, (b + 1) * s.len() / blocks))
+            .collect();
+        parallel_map(&ranges, |&r| accumulate(model, s, widths, r, shifts))
+            .into_iter()
+            .collect()
+    };
+    let blocks = match validation {
+        Some(_) => 1,
+        None => settings.folds,
+    };
+    let validation = match validation {
+        Some(v) => Some((stretches(v, 1)?.remove(0), *v)),
+        None => None,
+    };
+    Ok(HeldSums {
+        train: stretches(train, blocks)?,
+        validation,
+        friction: settings.friction,
+    })
+}
+
+/// Each joint's weight in the least squares: one over its residual rms after a plain
+/// fit (weighted least squares: a joint with small torques counts as much as one with
+/// large torques, relative to how well it can be explained).
+fn joint_weights(
+    sums: &JointSums,
+    width: usize,
+    friction: bool,
+    prior: &DVector<f64>,
+) -> Result<Vec<f64>, DynamicsError> {
+    let n = sums.joints();
+    let normal = sums.weighted(&vec![1.0; n], width).at(&vec![0; n]);
+    let active: Vec<bool> = (0..prior.len())
+        .map(|c| {
+            c < PARAMETERS_PER_BODY * n
+                || (friction
+                    && (c - PARAMETERS_PER_BODY * n) % JOINT_FEATURES < FIRST_SPRING_FEATURE)
+        })
+        .collect();
+    let x = solve(&normal, &active, prior, 1e-6).ok_or_else(|| DynamicsError::InvalidArgument("identification: the least-squares system is singular (does the recording move every joint?)".into()))?;
+    let rms = sums.rms_errors(&x, width);
+    let largest = rms.iter().copied().fold(0.0, f64::max);
+    Ok(rms
+        .iter()
+        .map(|r| 1.0 / r.max(1e-3 * largest).max(1e-12))
+        .collect())
 }
 
 /// The candidate with the lowest score (`(NaN, inf)` when none is finite).

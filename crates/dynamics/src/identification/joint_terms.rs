@@ -142,15 +142,12 @@ impl JointTerms {
 pub(crate) fn features(q: f64, qd: f64, qdd: f64, width: f64, out: &mut [f64; JOINT_FEATURES]) {
     let (s, c) = q.sin_cos();
     // sin 2q and cos 2q from sin q and cos q: one sin_cos call per sample.
-    *out = [
-        qdd,
-        qd,
-        (qd / width).tanh(),
-        (qd / (SECOND_WIDTH * width)).tanh(),
-        1.0,
-        s,
-        c,
-        2.0 * s * c,
-        c * c - s * s,
-    ];
+    let [narrow, wide] = coulomb_features(qd, width);
+    *out = [qdd, qd, narrow, wide, 1.0, s, c, 2.0 * s * c, c * c - s * s];
+}
+
+/// The two Coulomb features `[tanh(q'/w), tanh(q'/10w)]` of a joint at velocity `qd`.
+#[inline]
+pub(crate) fn coulomb_features(qd: f64, width: f64) -> [f64; 2] {
+    [(qd / width).tanh(), (qd / (SECOND_WIDTH * width)).tanh()]
 }

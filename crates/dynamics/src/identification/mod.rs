@@ -45,7 +45,7 @@ pub use fit::identify;
 pub use joint_terms::JointTerms;
 pub use payload::identify_payload;
 pub use samples::Samples;
-pub use settings::IdentificationSettings;
+pub use settings::{IdentificationSettings, COULOMB_WIDTH_CANDIDATES};
 pub use training_range::{
     beyond_training_range, outside_training_range, RangeExcursion, TRAINING_RANGE_MARGIN,
 };
@@ -161,7 +161,7 @@ impl Identification {
     pub fn from_model(model: Model) -> Self {
         let n = model.nq();
         let none = JointTerms {
-            coulomb_width: IdentificationSettings::default().coulomb_width,
+            coulomb_width: COULOMB_WIDTH_CANDIDATES[0],
             ..Default::default()
         };
         Identification {

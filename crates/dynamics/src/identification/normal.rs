@@ -8,7 +8,7 @@ use crate::algorithms::regressor::{joint_torque_regressor, PARAMETERS_PER_BODY};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::identification::cholesky::cholesky;
-use crate::identification::joint_terms::{features, JOINT_FEATURES};
+use crate::identification::joint_terms::{coulomb_features, features, JOINT_FEATURES};
 use crate::identification::samples::Samples;
 use crate::model::Model;
 
@@ -117,8 +117,10 @@ pub(crate) fn solve(
 
 /// Per joint, the unweighted sums of one stretch of samples over the columns that joint's
 /// rows can touch (`JointSums::columns`): the Gram matrix of its rows, their products with
-/// its torque at every candidate shift, and the torque's squares. Joint weights and shifts
-/// are applied afterwards, so one pass over the samples serves every choice.
+/// its torque at every candidate shift, and the torque's squares. Joint weights, shifts and
+/// the Coulomb width are applied afterwards, so one pass over the samples serves every
+/// choice: each joint's rows carry the two Coulomb features at every candidate width (the
+/// first width in the joint's own block, the others after it).
 #[derive(Clone, Debug)]
 pub(crate) struct JointSums {
     gram: Vec<DMatrix<f64>>,
@@ -127,7 +129,12 @@ pub(crate) struct JointSums {
     /// Per joint (rows) and shift (columns).
     yy: DMatrix<f64>,
     samples: usize,
+    /// Number of candidate Coulomb widths.
+    widths: usize,
 }
+
+/// The two Coulomb features' indices among a joint's features.
+const COULOMB_FEATURES: [usize; 2] = [2, 3];
 
 impl JointSums {
     /// The columns joint `i`'s rows can be non-zero in, of an arm of `n` joints: the
@@ -139,14 +146,49 @@ impl JointSums {
             .chain(inertial + JOINT_FEATURES * i..inertial + JOINT_FEATURES * (i + 1))
     }
 
-    fn zeros(n: usize, shifts: usize) -> Self {
-        let width = |i: usize| Self::columns(i, n).count();
+    /// Rows of joint `i`'s sums: its columns and the Coulomb features of the widths after
+    /// the first.
+    fn local_count(i: usize, n: usize, widths: usize) -> usize {
+        Self::columns(i, n).count() + COULOMB_FEATURES.len() * (widths - 1)
+    }
+
+    /// Where each of joint `i`'s columns (`JointSums::columns` order) is among its sums'
+    /// rows, with the Coulomb features of candidate width `width`.
+    fn local_rows(i: usize, n: usize, width: usize) -> Vec<usize> {
+        let own = Self::columns(i, n).count();
+        let first_feature = own - JOINT_FEATURES;
+        (0..own)
+            .map(|r| {
+                match COULOMB_FEATURES
+                    .iter()
+                    .position(|&f| r == first_feature + f)
+                {
+                    Some(k) if width > 0 => own + COULOMB_FEATURES.len() * (width - 1) + k,
+                    _ => r,
+                }
+            })
+            .collect()
+    }
+
+    fn zeros(n: usize, shifts: usize, widths: usize) -> Self {
+        let rows = |i: usize| Self::local_count(i, n, widths);
         JointSums {
-            gram: (0..n).map(|i| DMatrix::zeros(width(i), width(i))).collect(),
-            rhs: (0..n).map(|i| DMatrix::zeros(width(i), shifts)).collect(),
+            gram: (0..n).map(|i| DMatrix::zeros(rows(i), rows(i))).collect(),
+            rhs: (0..n).map(|i| DMatrix::zeros(rows(i), shifts)).collect(),
             yy: DMatrix::zeros(n, shifts),
             samples: 0,
+            widths,
         }
+    }
+
+    /// Number of candidate Coulomb widths the sums carry.
+    pub fn widths(&self) -> usize {
+        self.widths
+    }
+
+    /// Number of joints.
+    pub fn joints(&self) -> usize {
+        self.gram.len()
     }
 
     pub fn sum(parts: &[JointSums]) -> JointSums {
@@ -164,8 +206,9 @@ impl JointSums {
         total
     }
 
-    /// The normal equations' parts with joint `i`'s rows (and torque) times `weights[i]`.
-    pub fn weighted(&self, weights: &[f64]) -> NormalParts {
+    /// The normal equations' parts with joint `i`'s rows (and torque) times `weights[i]`,
+    /// at the `width`-th candidate Coulomb width.
+    pub fn weighted(&self, weights: &[f64], width: usize) -> NormalParts {
         let n = self.gram.len();
         let p = columns(n);
         let shifts = self.yy.ncols();
@@ -178,8 +221,9 @@ impl JointSums {
         for (i, w) in weights.iter().enumerate() {
             let w2 = w * w;
             let cols: Vec<usize> = Self::columns(i, n).collect();
-            for (a, &ca) in cols.iter().enumerate() {
-                for (b, &cb) in cols.iter().enumerate() {
+            let local = Self::local_rows(i, n, width);
+            for (&a, &ca) in local.iter().zip(&cols) {
+                for (&b, &cb) in local.iter().zip(&cols) {
                     parts.gram[(ca, cb)] += w2 * self.gram[i][(a, b)];
                 }
                 for c in 0..shifts {
@@ -193,13 +237,19 @@ impl JointSums {
         parts
     }
 
-    /// Each joint's rms residual of the solution `x` (unweighted, torques unshifted).
-    pub fn rms_errors(&self, x: &DVector<f64>) -> Vec<f64> {
+    /// Each joint's rms residual of the solution `x` (unweighted, torques unshifted) at the
+    /// `width`-th candidate Coulomb width.
+    pub fn rms_errors(&self, x: &DVector<f64>, width: usize) -> Vec<f64> {
         let n = self.gram.len();
         (0..n)
             .map(|i| {
-                let sub =
-                    DVector::from_iterator(self.gram[i].nrows(), Self::columns(i, n).map(|c| x[c]));
+                let mut sub = DVector::zeros(self.gram[i].nrows());
+                for (&r, c) in Self::local_rows(i, n, width)
+                    .iter()
+                    .zip(Self::columns(i, n))
+                {
+                    sub[r] = x[c];
+                }
                 let sse = self.yy[(i, 0)] - 2.0 * sub.dot(&self.rhs[i].column(0))
                     + sub.dot(&(&self.gram[i] * &sub));
                 (sse.max(0.0) / self.samples.max(1) as f64).sqrt()
@@ -263,12 +313,13 @@ pub(crate) fn shifted_torque(samples: &Samples, k: usize, i: usize, shift: f64) 
 
 /// [`JointSums`] of the samples `start..end` of `samples`, one right-hand side per shift
 /// (in samples: positive pairs each motion sample with a later torque sample, read across
-/// the stretch's ends). One regressor per sample; each joint's rows multiplied only over
-/// the columns they can touch.
+/// the stretch's ends) and the Coulomb features at every candidate width of `widths`
+/// (rad/s). One regressor per sample; each joint's rows multiplied only over the columns
+/// they can touch.
 pub(crate) fn accumulate(
     model: &Model,
     samples: &Samples,
-    width: f64,
+    widths: &[f64],
     (start, end): (usize, usize),
     shifts: &[f64],
 ) -> Result<JointSums, DynamicsError> {
@@ -277,14 +328,13 @@ pub(crate) fn accumulate(
     let mut data = Data::new(model);
     let cols: Vec<Vec<usize>> = (0..n).map(|i| JointSums::columns(i, n).collect()).collect();
     // Per joint, a batch of its rows (one column per sample) and of its torques.
-    let mut rows: Vec<DMatrix<f64>> = cols
-        .iter()
-        .map(|c| DMatrix::zeros(c.len(), BATCH))
+    let mut rows: Vec<DMatrix<f64>> = (0..n)
+        .map(|i| DMatrix::zeros(JointSums::local_count(i, n, widths.len()), BATCH))
         .collect();
     let mut torques = vec![DMatrix::zeros(BATCH, s_count); n];
     let mut f = [0.0; JOINT_FEATURES];
     let inertial = PARAMETERS_PER_BODY * n;
-    let mut sums = JointSums::zeros(n, s_count);
+    let mut sums = JointSums::zeros(n, s_count, widths.len());
     let mut k = start;
     while k < end {
         let m = (end - k).min(BATCH);
@@ -292,7 +342,7 @@ pub(crate) fn accumulate(
             let (q, qd, qdd, _) = samples.row(k + s);
             let y = joint_torque_regressor(model, &mut data, q, qd, qdd)?;
             for i in 0..n {
-                features(q[i], qd[i], qdd[i], width, &mut f);
+                features(q[i], qd[i], qdd[i], widths[0], &mut f);
                 let mut column = rows[i].column_mut(s);
                 for (r, &c) in cols[i].iter().enumerate() {
                     column[r] = if c < inertial {
@@ -300,6 +350,12 @@ pub(crate) fn accumulate(
                     } else {
                         f[c - inertial - JOINT_FEATURES * i]
                     };
+                }
+                for (w, &width) in widths.iter().enumerate().skip(1) {
+                    let [a, b] = coulomb_features(qd[i], width);
+                    let r = cols[i].len() + COULOMB_FEATURES.len() * (w - 1);
+                    column[r] = a;
+                    column[r + 1] = b;
                 }
                 for (c, shift) in shifts.iter().enumerate() {
                     torques[i][(s, c)] = shifted_torque(samples, k + s, i, *shift);

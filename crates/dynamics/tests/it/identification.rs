@@ -159,6 +159,43 @@ fn recovers_an_arm_on_motion_it_never_saw() {
     assert!(ident.summary.base_parameters > 7 && ident.summary.base_parameters < 70);
 }
 
+/// Left unset, the Coulomb width is chosen on held-out motion among the candidates: an arm
+/// whose friction has one of them gets it on every joint; given, the width is kept.
+#[test]
+fn the_coulomb_width_is_chosen_unless_given() {
+    let urdf = common::baxter();
+    let (q, qd, qdd) = motion(&urdf, 0.3, 30.0);
+    for truth_width in [0.003, 0.005] {
+        let terms: Vec<JointTerms> = truth_terms(7)
+            .into_iter()
+            .map(|t| JointTerms {
+                coulomb_width: truth_width,
+                ..t
+            })
+            .collect();
+        let tau = torques(&urdf, &terms, &q, &qd, &qdd);
+        let recording = [q.clone(), qd.clone(), qdd.clone(), tau];
+        let train = samples(&recording);
+        assert!(COULOMB_WIDTH_CANDIDATES.contains(&truth_width));
+        let chosen = identify(&urdf, &train, None, &IdentificationSettings::default()).unwrap();
+        let widths: Vec<f64> = chosen.joint_terms.iter().map(|t| t.coulomb_width).collect();
+        assert_eq!(widths, vec![truth_width; 7], "truth {truth_width}");
+        assert_eq!(chosen.summary.settings.coulomb_width, None);
+        let given = IdentificationSettings {
+            coulomb_width: Some(0.01),
+            ..Default::default()
+        };
+        let kept = identify(&urdf, &train, None, &given).unwrap();
+        assert!(kept.joint_terms.iter().all(|t| t.coulomb_width == 0.01));
+        let total = |e: &[f64]| e.iter().map(|x| x * x).sum::<f64>();
+        assert!(
+            total(&chosen.summary.expected_false_torque_rms)
+                < total(&kept.summary.expected_false_torque_rms),
+            "the truth's width fits held-out motion better than 0.01"
+        );
+    }
+}
+
 /// The multi-sine motion of seed 0.9 for `seconds` and its torques with deterministic
 /// pseudo-noise, uniform on +-`amplitude` (N m; `frequency` picks the sequence).
 fn noisy_recording(model: &Model, seconds: f64, frequency: f64, amplitude: f64) -> [Vec<f64>; 4] {

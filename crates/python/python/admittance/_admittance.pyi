@@ -18,6 +18,8 @@ ArrayLike = npt.ArrayLike
 
 #: The signal chain's low-pass cut-off (Hz) every front end defaults to (crates/loop).
 DEFAULT_SIGNAL_CUTOFF_HZ: float
+#: The Coulomb widths (rad/s) ``identify`` chooses among when none is given; 0.01 first.
+COULOMB_WIDTH_CANDIDATES: list[float]
 Vector = npt.Vector
 Matrix = npt.Vector
 StrPath = Union[str, "PathLike[str]"]
@@ -692,12 +694,13 @@ def identify(
     input_filter_hz: Optional[float] = None,
     springs: bool = True,
     max_mass_ratio: Optional[float] = 2.0,
-    coulomb_width: float = 0.01,
+    coulomb_width: Optional[float] = None,
 ) -> Identification:
     """Identifies the arm from free motion (``admittance identify``): settings chosen on
     ``validation`` or by blocked cross-validation over contiguous stretches; each body's mass
     at most ``max_mass_ratio`` times the URDF's (``None``: no bound); ``coulomb_width``: the
-    friction's narrower smooth sign ``tanh(qdot / w)`` (rad/s). Releases the GIL."""
+    friction's narrower smooth sign ``tanh(qdot / w)`` (rad/s; ``None``: chosen on held-out
+    motion among ``COULOMB_WIDTH_CANDIDATES``). Releases the GIL."""
 
 def excitation(
     m: Model,

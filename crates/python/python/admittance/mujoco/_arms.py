@@ -108,8 +108,9 @@ class ArmsConfig:
     dt: float = 1e-3
     sensor_cutoff_hz: float = 40.0
     input_filter_hz: float = 10.0
-    # The identification's Coulomb width (rad/s): the narrower smooth sign tanh(qdot / w).
-    coulomb_width: float = 0.01
+    # The identification's Coulomb width (rad/s): the narrower smooth sign tanh(qdot / w);
+    # None: chosen on held-out motion (adm.identify's default).
+    coulomb_width: float | None = None
     # The estimate's low-pass (Hz); 0: chosen per arm on the validation recording among
     # ESTIMATE_CUTOFFS_HZ (choose_estimate_cutoff).
     estimate_cutoff_hz: float = 0.0
@@ -426,6 +427,7 @@ def _run_arm(name, cfg, log, robots, stage):
             "expected_false_torque_rms": ident.summary["expected_false_torque_rms"],
             "prior_false_torque_rms": ident.summary["prior_false_torque_rms"],
             "springs": ident.summary["springs"],
+            "coulomb_width": ident.joint_terms[0]["coulomb_width"],
         },
         "validation_nrmse": {k: np.asarray(v.validation_nrmse).tolist() for k, v in nets.items()},
         "observers": observers,

@@ -28,7 +28,7 @@ def main(argv=None):
     p.add_argument("--push-force", type=float, default=10.0, help="peak of each push at the hand, N (10)")
     p.add_argument("--friction-scale", type=float, default=1.0)
     p.add_argument("--input-filter-hz", type=float, default=10.0)
-    p.add_argument("--coulomb-width", type=float, default=0.01, help="the identification's Coulomb width w of tanh(qdot / w), rad/s (0.01)")
+    p.add_argument("--coulomb-width", type=float, default=None, help="the identification's Coulomb width w of tanh(qdot / w), rad/s (default: chosen on held-out motion)")
     p.add_argument("--estimate-cutoff-hz", type=float, default=0.0, help="the estimate's low-pass, Hz (0: chosen per arm on the validation recording among 5, 10, 20, 40)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the arms included and excluded, and exit")
@@ -40,8 +40,8 @@ def main(argv=None):
     a = p.parse_args(argv)
     if a.jobs is not None and a.jobs < 1:
         p.error("--jobs must be at least 1")
-    if not (math.isfinite(a.coulomb_width) and a.coulomb_width > 0):
-        p.error(f"--coulomb-width {a.coulomb_width}: must be a positive width in rad/s (default 0.01)")
+    if a.coulomb_width is not None and not (math.isfinite(a.coulomb_width) and a.coulomb_width > 0):
+        p.error(f"--coulomb-width {a.coulomb_width}: must be a positive width in rad/s (or left out: chosen)")
     if a.quiet:
         from admittance import _progress
 
