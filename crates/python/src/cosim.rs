@@ -187,7 +187,8 @@ impl Plant {
     }
 
     /// `MujocoArm.external_torque`: without contacts, `J^T f` of the push at the tip, in
-    /// numpy's order (`zeros + jacp.T @ push`), on the chain's dofs (zeros without a
+    /// its order (`zeros + (jacp[0] f0 + jacp[1] f1 + jacp[2] f2)`, no fused multiply-add),
+    /// on the chain's dofs (zeros without a
     /// push); on a step with contacts, that Python function itself.
     fn external_torque(
         &self,

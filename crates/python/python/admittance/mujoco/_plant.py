@@ -242,7 +242,11 @@ class MujocoArm:
         tau = np.zeros(m.nv)
         if push is not None:
             mj.mj_jac(m, d, self.jacp, self.jacr, d.xpos[self.tip_body], self.tip_body)
-            tau += self.jacp.T @ push
+            # Row by row, not `jacp.T @ push`: BLAS may fuse the multiply-adds on one CPU and
+            # not on another, and the Rust stepper (crates/python/src/cosim.rs) must give the
+            # same bits everywhere.
+            jacp = self.jacp
+            tau += jacp[0] * push[0] + jacp[1] * push[1] + jacp[2] * push[2]
         wrench = np.zeros(6)
         for i in range(d.ncon):
             c = d.contact[i]
