@@ -19,6 +19,8 @@ use serde::{Deserialize, Serialize};
 pub(crate) const JOINT_FEATURES: usize = 9;
 /// Index of the first spring feature.
 pub(crate) const FIRST_SPRING_FEATURE: usize = 5;
+/// Indices of the two Coulomb features ([`coulomb_features`]).
+pub(crate) const COULOMB_FEATURES: [usize; 2] = [2, 3];
 /// How much wider the second smooth sign is than the first.
 const SECOND_WIDTH: f64 = 10.0;
 

@@ -8,7 +8,9 @@ use crate::algorithms::regressor::{joint_torque_regressor, PARAMETERS_PER_BODY};
 use crate::data::Data;
 use crate::error::DynamicsError;
 use crate::identification::cholesky::cholesky;
-use crate::identification::joint_terms::{coulomb_features, features, JOINT_FEATURES};
+use crate::identification::joint_terms::{
+    coulomb_features, features, COULOMB_FEATURES, JOINT_FEATURES,
+};
 use crate::identification::samples::Samples;
 use crate::model::Model;
 
@@ -132,9 +134,6 @@ pub(crate) struct JointSums {
     /// Number of candidate Coulomb widths.
     widths: usize,
 }
-
-/// The two Coulomb features' indices among a joint's features.
-const COULOMB_FEATURES: [usize; 2] = [2, 3];
 
 impl JointSums {
     /// The columns joint `i`'s rows can be non-zero in, of an arm of `n` joints: the
