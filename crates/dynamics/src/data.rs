@@ -66,6 +66,8 @@ pub struct Data {
     pub(crate) art_d: Vec<f64>,
     pub(crate) art_torque: Vec<f64>,
     pub(crate) bias_acc: Vec<Motion>,
+    /// The joints' axes up to a body, in that body's frame (the regressor's backward pass).
+    pub(crate) regressor_axes: Vec<Motion>,
 }
 
 impl Data {
@@ -103,6 +105,7 @@ impl Data {
             art_d: vec![0.0; n],
             art_torque: vec![0.0; n],
             bias_acc: vec![Motion::zero(); n],
+            regressor_axes: vec![Motion::zero(); n],
         }
     }
 

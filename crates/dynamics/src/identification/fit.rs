@@ -89,10 +89,14 @@ pub fn identify(
     // The URDF arm's torque on the training samples serves the checks and the prior's scale.
     let urdf_train = UrdfTorques::new(model, train, true);
     check_against_urdf(model, train, &urdf_train.total, "training samples")?;
-    if let Some(v) = validation {
-        let urdf_validation = UrdfTorques::new(model, v, false);
-        check_against_urdf(model, v, &urdf_validation.total, "validation samples")?;
-    }
+    let urdf_validation = match validation {
+        Some(v) => {
+            let torques = UrdfTorques::new(model, v, false);
+            check_against_urdf(model, v, &torques.total, "validation samples")?;
+            Some(torques)
+        }
+        None => None,
+    };
     let widths: Vec<f64> = match settings.coulomb_width {
         Some(w) => vec![w],
         None if settings.friction => COULOMB_WIDTH_CANDIDATES.to_vec(),
@@ -231,11 +235,11 @@ pub fn identify(
         .iter()
         .map(|s| (s / count.max(1) as f64).sqrt())
         .collect();
-    // The URDF's own error on the same held-out motion (it was fitted to nothing).
-    let prior_model = Identification::from_solution(model, &urdf, width)?;
-    let prior_rms = match &held {
-        Held::Recording { samples, .. } => prior_model.joint_errors(samples)?.rms,
-        Held::Folds { .. } => prior_model.joint_errors(train)?.rms,
+    // The URDF's own error on the same held-out motion (it was fitted to nothing): its
+    // torque there was computed for the checks.
+    let prior_rms = match (&held, &urdf_validation) {
+        (Held::Recording { samples, .. }, Some(v)) => v.rms_errors(samples),
+        _ => urdf_train.rms_errors(train),
     };
     let base = BaseParameters::new(model, 100, 1)?;
     let summary = IdentificationSummary {

@@ -53,7 +53,7 @@ pub use training_range::{
 use serde::{Deserialize, Serialize};
 
 use crate::algorithms::regressor::{with_inertial_parameters, PARAMETERS_PER_BODY};
-use crate::algorithms::rnea::rnea;
+use crate::algorithms::rnea::{rnea, rnea_pass_at_placements};
 use crate::data::Data;
 use crate::error::{check_len, DimensionError, DynamicsError};
 use crate::model::Model;
@@ -276,16 +276,20 @@ impl Identification {
     ) -> Result<Vec<Vec<f64>>, DynamicsError> {
         let n = self.model.nq();
         let mut data = Data::new(&self.model);
-        let (mut at_zero, mut at_one) = (self.clone(), self.clone());
-        at_zero.summary.acceleration_gain = 0.0;
-        at_one.summary.acceleration_gain = 1.0;
         let (mut p0, mut p1) = (vec![0.0; n], vec![0.0; n]);
         // Per joint: sum e0^2, sum e0 d, sum d^2 (e0 the error at gain 0, d the change per gain).
         let mut sums = vec![[0.0; 3]; n];
         for k in 0..samples.len() {
             let (q, qd, qdd, tau) = samples.row(k);
-            at_zero.predict(&mut data, q, qd, qdd, &mut p0)?;
-            at_one.predict(&mut data, q, qd, qdd, &mut p1)?;
+            // `predict` at gains 1 and 0, the joint placements and joint terms computed once.
+            p1.copy_from_slice(rnea(&self.model, &mut data, q, qd, qdd)?.as_slice());
+            rnea_pass_at_placements(&self.model, &mut data, Some(qd), None, None);
+            for i in 0..n {
+                let terms = &self.joint_terms[i];
+                let other = terms.velocity_and_position_torque(q[i], qd[i]);
+                p0[i] = data.tau[i] + other;
+                p1[i] += terms.armature * qdd[i] + other;
+            }
             for i in 0..n {
                 let (e0, d) = (tau[i] - p0[i], p1[i] - p0[i]);
                 sums[i][0] += e0 * e0;

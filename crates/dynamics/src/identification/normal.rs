@@ -16,6 +16,8 @@ use crate::model::Model;
 
 /// Samples stacked per product (rows of `W`), to multiply in blocks.
 const BATCH: usize = 128;
+/// Rows and columns of the blocks the Gram matrix is accumulated in.
+const GRAM_BLOCK: usize = 32;
 
 /// `W^T W`, `W^T y`, `y^T y` and the row count of one stretch of samples, for the columns
 /// `[10 n inertial | JOINT_FEATURES per joint]`.
@@ -334,6 +336,11 @@ pub(crate) fn accumulate(
     let mut f = [0.0; JOINT_FEATURES];
     let inertial = PARAMETERS_PER_BODY * n;
     let mut sums = JointSums::zeros(n, s_count, widths.len());
+    let split_shifts: Vec<(i64, f64)> = shifts
+        .iter()
+        .map(|s| (s.floor() as i64, s - s.floor()))
+        .collect();
+    let last = samples.len() as i64 - 1;
     let mut k = start;
     while k < end {
         let m = (end - k).min(BATCH);
@@ -356,8 +363,17 @@ pub(crate) fn accumulate(
                     column[r] = a;
                     column[r + 1] = b;
                 }
-                for (c, shift) in shifts.iter().enumerate() {
-                    torques[i][(s, c)] = shifted_torque(samples, k + s, i, *shift);
+                for (c, &(whole, fraction)) in split_shifts.iter().enumerate() {
+                    // Inside the recording `k + shift` splits into the same whole sample and
+                    // fraction at every k: `shifted_torque`'s value without its floor.
+                    let k0 = (k + s) as i64 + whole;
+                    torques[i][(s, c)] = if k0 >= 0 && k0 < last {
+                        let k0 = k0 as usize;
+                        samples.tau[k0 * n + i] * (1.0 - fraction)
+                            + samples.tau[(k0 + 1) * n + i] * fraction
+                    } else {
+                        shifted_torque(samples, k + s, i, shifts[c])
+                    };
                 }
             }
         }
@@ -365,7 +381,21 @@ pub(crate) fn accumulate(
             let batch = rows[i].columns(0, m);
             let transposed = batch.transpose();
             let y = torques[i].rows(0, m);
-            sums.gram[i].gemm(1.0, &batch, &transposed, 1.0);
+            // The Gram matrix is symmetric: only its blocks on and below the diagonal are
+            // multiplied (the upper triangle is copied once, at the end).
+            let count = batch.nrows();
+            for r0 in (0..count).step_by(GRAM_BLOCK) {
+                let rl = GRAM_BLOCK.min(count - r0);
+                for c0 in (0..=r0).step_by(GRAM_BLOCK) {
+                    let cl = GRAM_BLOCK.min(count - c0);
+                    sums.gram[i].view_mut((r0, c0), (rl, cl)).gemm(
+                        1.0,
+                        &batch.rows(r0, rl),
+                        &transposed.columns(c0, cl),
+                        1.0,
+                    );
+                }
+            }
             sums.rhs[i].gemm(1.0, &batch, &y, 1.0);
             for c in 0..s_count {
                 sums.yy[(i, c)] += y.column(c).norm_squared();
@@ -373,6 +403,9 @@ pub(crate) fn accumulate(
         }
         sums.samples += m;
         k += m;
+    }
+    for gram in sums.gram.iter_mut() {
+        gram.fill_upper_triangle_with_lower_triangle();
     }
     Ok(sums)
 }

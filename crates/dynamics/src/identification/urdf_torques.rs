@@ -40,6 +40,20 @@ impl UrdfTorques {
         }
         UrdfTorques { total, bias }
     }
+
+    /// Each joint's rms difference between the recorded torque of `samples` (those these
+    /// torques were computed on) and the URDF's: the URDF arm's own false torque there.
+    pub(super) fn rms_errors(&self, samples: &Samples) -> Vec<f64> {
+        let n = samples.dof;
+        let mut sq = vec![0.0; n];
+        for (predicted, recorded) in self.total.chunks_exact(n).zip(samples.tau.chunks_exact(n)) {
+            for i in 0..n {
+                sq[i] += (predicted[i] - recorded[i]).powi(2);
+            }
+        }
+        let len = samples.len().max(1) as f64;
+        sq.iter().map(|s| (s / len).sqrt()).collect()
+    }
 }
 
 #[cfg(test)]

@@ -44,17 +44,22 @@ pub fn repeat_period(positions: &[f64], width: usize, max_lag: usize) -> Option<
     if moving.is_empty() {
         return None;
     }
+    // The moving columns over sqrt(2 var): a squared difference is then already in units of
+    // the variance (multiplied here once instead of divided at every lag).
+    let scaled: Vec<f64> = x
+        .iter()
+        .flat_map(|r| moving.iter().map(|&c| r[c] / (2.0 * var[c]).sqrt()))
+        .collect();
+    let m = moving.len();
     // Mean squared difference at a lag, in units of the variance (1 for unrelated rows).
     let distance = |lag: usize| -> f64 {
         let pairs = len - lag;
-        let mut sum = 0.0;
-        for t in 0..pairs {
-            for &c in &moving {
-                let d = x[t + lag][c] - x[t][c];
-                sum += d * d / (2.0 * var[c]);
-            }
-        }
-        sum / (pairs * moving.len()) as f64
+        let sum: f64 = scaled[lag * m..]
+            .iter()
+            .zip(&scaled[..pairs * m])
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum();
+        sum / (pairs * m) as f64
     };
     let max_lag = (max_lag / step).min(len - len / 4);
     let mut left = false;
