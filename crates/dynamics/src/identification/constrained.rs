@@ -35,11 +35,11 @@ const GAP: f64 = 1e-7;
 const GAP_FLOOR: f64 = 1e-13;
 /// Newton steps in all (a cap: 86 to 127 were taken on the Baxter recording).
 const MAX_NEWTON_STEPS: usize = 400;
-/// Newton decrement (`lambda^2` of `t f + barrier`) at which a centring stops: the last
-/// `t`'s, and the earlier ones'. Centring the earlier ones to the last one's precision took a
-/// third more Newton steps on the Panda's 60 s recording (10,607 against 7,134 at 4 Hz) for
-/// the same fit (parameters within 1e-10 of each other's size).
+/// Newton decrement (`lambda^2` of `t f + barrier`) at which the last `t`'s centring stops.
 const FINAL_DECREMENT: f64 = 1e-7;
+/// The same for the earlier `t`s, which only lead to the last: centring them to the last
+/// one's precision took a third more Newton steps on the simulated Panda's 60 s at 4 Hz
+/// (10,607 against 7,134) for the same fit (its expected false torque within 1e-9, relative).
 const PATH_DECREMENT: f64 = 1.0;
 /// Halvings of a step before the line search gives up.
 const MAX_HALVINGS: usize = 60;
