@@ -656,6 +656,38 @@ mod tests {
     }
 
     #[test]
+    fn a_long_file_keeps_its_order_and_names_the_line_of_an_error_in_either_stretch() {
+        // The rows are parsed in two stretches side by side: they come back in the file's
+        // order, and an error names its line before, after and at the seam (row 50 of 101).
+        let row = |k: usize| format!("{},{k},1,2,3,4,5,6,7", k as f64 * 0.001);
+        let mut lines: Vec<String> = (0..101).map(row).collect();
+        // A blank line is skipped but counted: `lines[i]` is line i + 2 (after the header).
+        lines.insert(30, String::new());
+        let text = |lines: &[String]| format!("{HEADER}\n{}\n", lines.join("\n"));
+        let data = parse(&text(&lines)).unwrap();
+        assert_eq!(data.len(), 101);
+        assert!(data.q.chunks(2).enumerate().all(|(k, q)| q[0] == k as f64));
+        assert!(data.t.windows(2).all(|w| w[0] < w[1]));
+        for index in [11, 51, 101] {
+            let mut broken = lines.clone();
+            broken[index] = broken[index].replace(",1,2,3,", ",x,2,3,");
+            let err = parse(&text(&broken)).unwrap_err();
+            assert!(
+                matches!(&err, FreeMotionError::NotANumber { line, column, .. } if *line == index + 2 && column == "q.b"),
+                "{index}: {err}"
+            );
+        }
+        // Row 50 (`lines[51]`) opens the second stretch: its time equal to row 49's.
+        let mut seam = lines.clone();
+        seam[51] = seam[51].replacen("0.05,", "0.049,", 1);
+        let err = parse(&text(&seam)).unwrap_err();
+        assert!(
+            matches!(err, FreeMotionError::NonMonotonicTime { line: 53, .. }),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn wrong_field_count_and_empty_files() {
         let text = format!("{HEADER}\n0,1,2,3,4,5,6,7\n");
         assert!(matches!(
