@@ -39,7 +39,7 @@ PIN_BIN="$TARGET_DIR/pinocchio_timing"
 # directory of its own so that the normal build is not invalidated.
 OURS_TARGET="$TARGET_DIR/bench-native"
 OURS_BIN="$OURS_TARGET/release/examples/timing"
-ALGOS="rnea crba aba jacobian coriolis gravity fk"
+ALGOS="rnea crba aba jacobian coriolis gravity fk regressor"
 
 [ -f "$URDF" ] || { echo "no such URDF: $URDF" >&2; exit 2; }
 

@@ -14,7 +14,7 @@
 //
 //   <name> <median ns per call>
 //
-// with names rnea crba aba jacobian coriolis gravity fk, the same as the Rust timing example
+// with names rnea crba aba jacobian coriolis gravity fk regressor, the same as the Rust timing example
 // (crates/dynamics/examples/timing.rs). Information lines go to stderr, prefixed with '#'.
 //
 // Pinocchio's algorithms are header templates; compiled here without
@@ -39,6 +39,7 @@
 #include "pinocchio/algorithm/frames.hpp"
 #include "pinocchio/algorithm/joint-configuration.hpp"
 #include "pinocchio/algorithm/kinematics.hpp"
+#include "pinocchio/algorithm/regressor.hpp"
 #include "pinocchio/algorithm/rnea.hpp"
 #include "pinocchio/multibody.hpp"
 #include "pinocchio/parsers/urdf.hpp"
@@ -172,6 +173,9 @@ int main(int argc, char** argv) {
     pin::forwardKinematics(model, data, Q[i]);
     pin::updateFramePlacements(model, data);
     return data.oMf[tip_id].translation()[0];
+  });
+  report("regressor", plan, [&](size_t i) {
+    return pin::computeJointTorqueRegressor(model, data, Q[i], V[i], A[i])(0, 0);
   });
 
   // One state through RNEA for a cross-check against the JSON fixtures (stderr only).

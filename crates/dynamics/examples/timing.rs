@@ -84,4 +84,7 @@ fn main() {
     time("fk", &mut |k| {
         black_box(forward_kinematics(&model, &mut data, &qs[k]).ok());
     });
+    time("regressor", &mut |k| {
+        black_box(joint_torque_regressor(&model, &mut data, &qs[k], &vs[k], &as_[k]).is_ok());
+    });
 }
