@@ -20,6 +20,10 @@
 
 use std::path::Path;
 
+mod layout;
+
+use layout::Layout;
+
 /// Largest magnitude of a `q`, `qdot`, `qddot` or `tau` value: 10^12 (the bound of the
 /// learning crate's data sets, `admittance_learning::broad::MAX_ABS_DATA_VALUE`). No joint
 /// signal in SI units comes near it: a value beyond is a unit error or a corrupted field,
@@ -253,8 +257,8 @@ impl FreeMotionData {
             &[0, 1].map(|part| (part * rows.len() / 2, (part + 1) * rows.len() / 2)),
             |&(from, to)| layout.parse_rows(&rows[from..to], source_name),
         );
+        // In the file's order: the seam before a stretch's own first problem.
         for stretch in stretches {
-            let stretch = stretch?;
             if let (Some(&previous), Some(&t)) = (data.t.last(), stretch.t.first()) {
                 if t <= previous {
                     return Err(FreeMotionError::NonMonotonicTime {
@@ -264,6 +268,9 @@ impl FreeMotionData {
                         previous,
                     });
                 }
+            }
+            if let Some(problem) = stretch.problem {
+                return Err(problem);
             }
             data.t.extend(stretch.t);
             data.q.extend(stretch.q);
@@ -317,182 +324,6 @@ pub fn observer_training_arrays(
         y.extend_from_slice(&data.tau);
     }
     Ok((x, y))
-}
-
-/// Which fields of a row the loader reads.
-struct Layout<'h> {
-    /// Every header column, trimmed.
-    columns: Vec<&'h str>,
-    /// The joints, in the order of the data.
-    joints: Vec<String>,
-    /// Field index of `t`, then of `q`, `qdot`, `qddot`, `tau` for every joint.
-    fields: Vec<usize>,
-}
-
-const SIGNALS: [&str; 4] = ["q", "qdot", "qddot", "tau"];
-
-/// The data rows of a contiguous stretch of the file.
-struct Stretch {
-    /// Line number (1-based) of its first row.
-    first_line: usize,
-    t: Vec<f64>,
-    q: Vec<f64>,
-    qdot: Vec<f64>,
-    qddot: Vec<f64>,
-    tau: Vec<f64>,
-}
-
-impl Layout<'_> {
-    /// `rows` (0-based line index, text) parsed and checked: field count, values, time
-    /// increasing within them.
-    fn parse_rows(
-        &self,
-        rows: &[(usize, &str)],
-        source_name: &str,
-    ) -> Result<Stretch, FreeMotionError> {
-        let n = self.joints.len();
-        let src = || source_name.to_string();
-        let mut out = Stretch {
-            first_line: rows.first().map_or(0, |(k, _)| k + 1),
-            t: Vec::with_capacity(rows.len()),
-            q: Vec::with_capacity(rows.len() * n),
-            qdot: Vec::with_capacity(rows.len() * n),
-            qddot: Vec::with_capacity(rows.len() * n),
-            tau: Vec::with_capacity(rows.len() * n),
-        };
-        // Field index -> slot in `values` (t, then q, qdot, qddot, tau per joint).
-        let mut values = vec![0.0; 1 + 4 * n];
-        let mut parts: Vec<&str> = Vec::with_capacity(self.columns.len());
-        for &(k, line) in rows {
-            let line_no = k + 1;
-            parts.clear();
-            parts.extend(line.split(','));
-            if parts.len() != self.columns.len() {
-                return Err(FreeMotionError::FieldCount {
-                    source_name: src(),
-                    line: line_no,
-                    expected: self.columns.len(),
-                    found: parts.len(),
-                });
-            }
-            for (slot, &field) in self.fields.iter().enumerate() {
-                values[slot] = self.value(parts[field], field, slot, line_no, source_name)?;
-            }
-            let t = values[0];
-            if let Some(&previous) = out.t.last() {
-                if t <= previous {
-                    return Err(FreeMotionError::NonMonotonicTime {
-                        source_name: src(),
-                        line: line_no,
-                        time: t,
-                        previous,
-                    });
-                }
-            }
-            out.t.push(t);
-            for (s, signal) in [&mut out.q, &mut out.qdot, &mut out.qddot, &mut out.tau]
-                .into_iter()
-                .enumerate()
-            {
-                signal.extend_from_slice(&values[1 + s * n..1 + (s + 1) * n]);
-            }
-        }
-        Ok(out)
-    }
-}
-
-impl<'h> Layout<'h> {
-    fn from_header(
-        header: &'h str,
-        line: usize,
-        source_name: &str,
-        joints: Option<&[&str]>,
-    ) -> Result<Self, FreeMotionError> {
-        let columns: Vec<&str> = header.split(',').map(str::trim).collect();
-        let missing = |column: String| FreeMotionError::MissingColumn {
-            source_name: source_name.to_string(),
-            line,
-            column,
-        };
-        let find = |name: &str| -> Result<usize, FreeMotionError> {
-            let mut hits = columns
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| **c == name)
-                .map(|(i, _)| i);
-            let first = hits.next().ok_or_else(|| missing(name.to_string()))?;
-            match hits.next() {
-                Some(second) => Err(FreeMotionError::RepeatedColumn {
-                    source_name: source_name.to_string(),
-                    line,
-                    column: name.to_string(),
-                    first: first + 1,
-                    second: second + 1,
-                }),
-                None => Ok(first),
-            }
-        };
-        let joints: Vec<String> = match joints {
-            Some(j) => j.iter().map(|s| s.to_string()).collect(),
-            None => columns
-                .iter()
-                .filter_map(|c| c.strip_prefix("q."))
-                .map(String::from)
-                .collect(),
-        };
-        let mut fields = vec![find("t")?];
-        if joints.is_empty() {
-            return Err(missing("q.<joint>".into()));
-        }
-        for prefix in SIGNALS {
-            for j in &joints {
-                fields.push(find(&format!("{prefix}.{j}"))?);
-            }
-        }
-        Ok(Self {
-            columns,
-            joints,
-            fields,
-        })
-    }
-
-    /// The value of `text` (field `field`, read into `slot`), validated.
-    fn value(
-        &self,
-        text: &str,
-        field: usize,
-        slot: usize,
-        line: usize,
-        source_name: &str,
-    ) -> Result<f64, FreeMotionError> {
-        let column = || self.columns[field].to_string();
-        let text = text.trim();
-        let v: f64 = text.parse().map_err(|_| FreeMotionError::NotANumber {
-            source_name: source_name.to_string(),
-            line,
-            column: column(),
-            text: text.to_string(),
-        })?;
-        if !v.is_finite() {
-            return Err(FreeMotionError::NonFinite {
-                source_name: source_name.to_string(),
-                line,
-                column: column(),
-                value: v,
-            });
-        }
-        // Slot 0 is the time, which only has to increase.
-        if slot > 0 && v.abs() > MAX_ABS_VALUE {
-            return Err(FreeMotionError::OutOfRange {
-                source_name: source_name.to_string(),
-                line,
-                column: column(),
-                value: v,
-                limit: MAX_ABS_VALUE,
-            });
-        }
-        Ok(v)
-    }
 }
 
 #[cfg(test)]
@@ -680,6 +511,13 @@ mod tests {
         // Row 50 (`lines[51]`) opens the second stretch: its time equal to row 49's.
         let mut seam = lines.clone();
         seam[51] = seam[51].replacen("0.05,", "0.049,", 1);
+        let err = parse(&text(&seam)).unwrap_err();
+        assert!(
+            matches!(err, FreeMotionError::NonMonotonicTime { line: 53, .. }),
+            "{err}"
+        );
+        // The seam is told before a later problem of the second stretch: the file's first.
+        seam[80] = seam[80].replace(",1,2,3,", ",x,2,3,");
         let err = parse(&text(&seam)).unwrap_err();
         assert!(
             matches!(err, FreeMotionError::NonMonotonicTime { line: 53, .. }),

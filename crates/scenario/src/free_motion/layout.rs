@@ -1,0 +1,194 @@
+//! The columns of a free-motion CSV and its rows read through them (`free_motion.rs`).
+
+use super::{FreeMotionError, MAX_ABS_VALUE};
+
+/// Which fields of a row the loader reads.
+pub(super) struct Layout<'h> {
+    /// Every header column, trimmed.
+    pub columns: Vec<&'h str>,
+    /// The joints, in the order of the data.
+    pub joints: Vec<String>,
+    /// Field index of `t`, then of `q`, `qdot`, `qddot`, `tau` for every joint.
+    pub fields: Vec<usize>,
+}
+
+const SIGNALS: [&str; 4] = ["q", "qdot", "qddot", "tau"];
+
+/// The data rows of a contiguous stretch of the file, up to its first problem.
+pub(super) struct Stretch {
+    /// Line number (1-based) of its first row.
+    pub first_line: usize,
+    pub t: Vec<f64>,
+    pub q: Vec<f64>,
+    pub qdot: Vec<f64>,
+    pub qddot: Vec<f64>,
+    pub tau: Vec<f64>,
+    /// The first problem in the stretch, the rows before it kept.
+    pub problem: Option<FreeMotionError>,
+}
+
+impl Layout<'_> {
+    /// `rows` (0-based line index, text) parsed and checked (field count, values, time
+    /// increasing within them) up to the first problem, which the stretch carries.
+    pub(super) fn parse_rows(&self, rows: &[(usize, &str)], source_name: &str) -> Stretch {
+        let n = self.joints.len();
+        let mut out = Stretch {
+            first_line: rows.first().map_or(0, |(k, _)| k + 1),
+            t: Vec::with_capacity(rows.len()),
+            q: Vec::with_capacity(rows.len() * n),
+            qdot: Vec::with_capacity(rows.len() * n),
+            qddot: Vec::with_capacity(rows.len() * n),
+            tau: Vec::with_capacity(rows.len() * n),
+            problem: None,
+        };
+        // Field index -> slot in `values` (t, then q, qdot, qddot, tau per joint).
+        let mut values = vec![0.0; 1 + 4 * n];
+        let mut parts: Vec<&str> = Vec::with_capacity(self.columns.len());
+        for &(k, line) in rows {
+            if let Err(problem) = self.parse_row(line, k + 1, source_name, &mut parts, &mut values)
+            {
+                out.problem = Some(problem);
+                break;
+            }
+            let t = values[0];
+            if let Some(&previous) = out.t.last() {
+                if t <= previous {
+                    out.problem = Some(FreeMotionError::NonMonotonicTime {
+                        source_name: source_name.to_string(),
+                        line: k + 1,
+                        time: t,
+                        previous,
+                    });
+                    break;
+                }
+            }
+            out.t.push(t);
+            for (s, signal) in [&mut out.q, &mut out.qdot, &mut out.qddot, &mut out.tau]
+                .into_iter()
+                .enumerate()
+            {
+                signal.extend_from_slice(&values[1 + s * n..1 + (s + 1) * n]);
+            }
+        }
+        out
+    }
+
+    /// One row's fields into `values` (its slots: t, then q, qdot, qddot, tau per joint).
+    fn parse_row<'l>(
+        &self,
+        line: &'l str,
+        line_no: usize,
+        source_name: &str,
+        parts: &mut Vec<&'l str>,
+        values: &mut [f64],
+    ) -> Result<(), FreeMotionError> {
+        parts.clear();
+        parts.extend(line.split(','));
+        if parts.len() != self.columns.len() {
+            return Err(FreeMotionError::FieldCount {
+                source_name: source_name.to_string(),
+                line: line_no,
+                expected: self.columns.len(),
+                found: parts.len(),
+            });
+        }
+        for (slot, &field) in self.fields.iter().enumerate() {
+            values[slot] = self.value(parts[field], field, slot, line_no, source_name)?;
+        }
+        Ok(())
+    }
+}
+
+impl<'h> Layout<'h> {
+    pub(super) fn from_header(
+        header: &'h str,
+        line: usize,
+        source_name: &str,
+        joints: Option<&[&str]>,
+    ) -> Result<Self, FreeMotionError> {
+        let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+        let missing = |column: String| FreeMotionError::MissingColumn {
+            source_name: source_name.to_string(),
+            line,
+            column,
+        };
+        let find = |name: &str| -> Result<usize, FreeMotionError> {
+            let mut hits = columns
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c == name)
+                .map(|(i, _)| i);
+            let first = hits.next().ok_or_else(|| missing(name.to_string()))?;
+            match hits.next() {
+                Some(second) => Err(FreeMotionError::RepeatedColumn {
+                    source_name: source_name.to_string(),
+                    line,
+                    column: name.to_string(),
+                    first: first + 1,
+                    second: second + 1,
+                }),
+                None => Ok(first),
+            }
+        };
+        let joints: Vec<String> = match joints {
+            Some(j) => j.iter().map(|s| s.to_string()).collect(),
+            None => columns
+                .iter()
+                .filter_map(|c| c.strip_prefix("q."))
+                .map(String::from)
+                .collect(),
+        };
+        let mut fields = vec![find("t")?];
+        if joints.is_empty() {
+            return Err(missing("q.<joint>".into()));
+        }
+        for prefix in SIGNALS {
+            for j in &joints {
+                fields.push(find(&format!("{prefix}.{j}"))?);
+            }
+        }
+        Ok(Self {
+            columns,
+            joints,
+            fields,
+        })
+    }
+
+    /// The value of `text` (field `field`, read into `slot`), validated.
+    fn value(
+        &self,
+        text: &str,
+        field: usize,
+        slot: usize,
+        line: usize,
+        source_name: &str,
+    ) -> Result<f64, FreeMotionError> {
+        let column = || self.columns[field].to_string();
+        let text = text.trim();
+        let v: f64 = text.parse().map_err(|_| FreeMotionError::NotANumber {
+            source_name: source_name.to_string(),
+            line,
+            column: column(),
+            text: text.to_string(),
+        })?;
+        if !v.is_finite() {
+            return Err(FreeMotionError::NonFinite {
+                source_name: source_name.to_string(),
+                line,
+                column: column(),
+                value: v,
+            });
+        }
+        // Slot 0 is the time, which only has to increase.
+        if slot > 0 && v.abs() > MAX_ABS_VALUE {
+            return Err(FreeMotionError::OutOfRange {
+                source_name: source_name.to_string(),
+                line,
+                column: column(),
+                value: v,
+                limit: MAX_ABS_VALUE,
+            });
+        }
+        Ok(v)
+    }
+}
