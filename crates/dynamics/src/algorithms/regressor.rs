@@ -99,7 +99,7 @@ pub fn joint_torque_regressor<'d>(
     data.regressor.fill(0.0);
     // Row i of body j's block is joint i's axis (in body j's frame) dotted with the body's
     // wrench for each unit parameter: one axis carried up the chain per body, instead of
-    // ten wrenches carried down it (the same products, a fifth of the transforms).
+    // ten wrenches carried down it (the same products, a tenth of the transforms).
     for j in 0..n {
         let x = &data.joint_placements[j];
         for axis in data.regressor_axes[..j].iter_mut() {
