@@ -26,6 +26,12 @@ Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.c
 120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
 `admittance.mujoco.arms` in MuJoCo (60 s of `adm.excitation(m, 60, seed=1)` train, 30 s of
 other free motion, `seed=2`, are scored; the plant, sensors and PD of that table).
+Your own arm's recording (`--recording CSV --urdf URDF [--base B --tip T]`: a free-motion CSV,
+columns `t, q.J, qdot.J, qddot.J, tau.J` for the chain's joints, as `admittance import`
+writes it) instead: fitted on `--train FROM,UNTIL` and scored on `--score FROM,UNTIL` (default:
+the last fifth scored, the rest fitted), or scored on another recording of the arm
+(`--score-recording CSV`); the stretches never overlap. Joints outside the chain are held at 0
+in Pinocchio's model, whose regressor is checked against the project's RNEA first.
 `--torque-scale F` multiplies every recorded torque by F, training and scored alike: a torque
 signal of another size than the URDF's arm (a torque constant or gear ratio off).
 `--drop-rows P` drops a random fraction P of the MuJoCo training recordings' rows (a logger
@@ -243,6 +249,76 @@ def scale_torque(data, factor):
     return {**data, "tau": np.asarray(data["tau"]) * factor} if factor != 1.0 else data
 
 
+def load_recording(path, m):
+    """A free-motion CSV (docs/outputs.md: columns ``t, q.J, qdot.J, qddot.J, tau.J`` for the
+    chain's joints ``J``; ``admittance import`` writes it) as arrays; a clear exit naming the
+    file when it is not one."""
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise SystemExit(f"{path}: no such file")
+    with path.open() as f:
+        header = [name.strip() for name in f.readline().split(",")]
+    col = {name: i for i, name in enumerate(header)}
+    wanted = ["t"] + [f"{key}.{j}" for key in ("q", "qdot", "qddot", "tau") for j in m.joint_names]
+    missing = [name for name in wanted if name not in col]
+    if missing:
+        raise SystemExit(
+            f"{path}: line 1: no column '{missing[0]}' ({len(missing)} of {len(wanted)} missing); the columns are "
+            f"t, q.J, qdot.J, qddot.J, tau.J for the chain's joints J: {', '.join(m.joint_names)} (--base, --tip)"
+        )
+    try:
+        table = np.loadtxt(path, delimiter=",", skiprows=1, usecols=[col[name] for name in wanted], ndmin=2)
+    except ValueError as e:
+        raise SystemExit(f"{path}: {e} (every row needs a number in each of the chain's columns)")
+    t = table[:, 0]
+    if len(t) < 2 or not np.all(np.isfinite(table)):
+        raise SystemExit(f"{path}: {len(t)} rows{'' if len(t) < 2 else ', some not finite'}: needs a recording of finite numbers")
+    backwards = np.flatnonzero(np.diff(t) <= 0)
+    if backwards.size:
+        raise SystemExit(f"{path}: line {backwards[0] + 3}: time {t[backwards[0] + 1]:g} s does not come after {t[backwards[0]]:g} s")
+    n = m.n
+    data = {"t": t}
+    for k, key in enumerate(("q", "qdot", "qddot", "tau")):
+        data[key] = table[:, 1 + k * n : 1 + (k + 1) * n]
+    return data
+
+
+def recording_points(log, urdf, m, path, train_s=None, score_s=None, score_path=None, torque_scale=1.0, label=None):
+    """A real recording (a free-motion CSV of ``m``, the chain of ``urdf``): fitted on
+    ``train_s`` = [from, until) s (default: all but the last fifth, or the whole recording
+    when another one is scored), scored on ``score_s`` of ``score_path`` (default: the same
+    recording's last fifth, or the whole other recording); never on rows the fit saw."""
+    data = scale_torque(load_recording(path, m), torque_scale)
+    t = data["t"]
+    scored = data if score_path is None else scale_torque(load_recording(score_path, m), torque_scale)
+    ts = scored["t"]
+    if score_path is None and train_s is None and score_s is None:
+        cut = t[0] + 0.8 * (t[-1] - t[0])
+        train_s, score_s = (t[0], cut), (cut, t[-1] + 1.0)
+    if train_s is None:
+        train_s = (t[0], t[-1] + 1.0) if score_path is not None else (t[0], score_s[0])
+    if score_s is None:
+        score_s = (ts[0], ts[-1] + 1.0) if score_path is not None else (train_s[1], t[-1] + 1.0)
+    train_mask = (t >= train_s[0]) & (t < train_s[1])
+    mask = (ts >= score_s[0]) & (ts < score_s[1])
+    for rows_, what, flag in ((train_mask, "fitted", "train"), (mask, "scored", "score")):
+        if rows_.sum() < 100:
+            raise SystemExit(f"--{flag}: {int(rows_.sum())} rows {what} (at least 100); the recording runs {t[0]:g}-{t[-1]:g} s")
+    same_file = score_path is None or pathlib.Path(score_path).resolve() == pathlib.Path(path).resolve()
+    if same_file and np.any(mask & (ts >= train_s[0]) & (ts < train_s[1])):
+        raise SystemExit("the fitted and scored stretches overlap: score on motion the fit never saw")
+    if label is None:
+        name = pathlib.Path(path).name
+        other = "" if score_path is None else f"{pathlib.Path(score_path).name} "
+        def span(a, b, end):
+            return f"{round(a, 2):g}-{round(min(b, end), 2):g}"
+
+        label = f"{name} {span(*train_s, t[-1])} -> {other}{span(*score_s, ts[-1])} s"
+    pmodel = pinocchio_chain(urdf, m.joint_names)
+    check_regressor(m, pmodel, data, label)
+    return compare(label, m, pmodel, rows(data, train_mask), {"data": scored, "mask": mask}, log)
+
+
 def baxter(log, torque_scale=1.0, train_s=(0.0, 120.0), score_s=None):
     """The real Baxter recording: trained on ``train_s`` = [from, until) s, scored on
     ``score_s`` (default: the last 30 s)."""
@@ -253,26 +329,13 @@ def baxter(log, torque_scale=1.0, train_s=(0.0, 120.0), score_s=None):
         return []
     urdf = ROOT / "models" / "baxter_left_arm.urdf"
     m = adm.Model.from_urdf(str(urdf))
-    header = path.read_text().splitlines()[0].split(",")
-    table = np.loadtxt(path, delimiter=",", skiprows=1)
-    col = {name.strip(): i for i, name in enumerate(header)}
-    data = {"t": table[:, col["t"]]}
-    for key in ("q", "qdot", "qddot", "tau"):
-        data[key] = np.stack([table[:, col[f"{key}.{j}"]] for j in m.joint_names], axis=1)
-    t = data["t"]
-    data = scale_torque(data, torque_scale)
-    train = rows(data, (t >= train_s[0]) & (t < train_s[1]))
+    t_end = load_recording(path, m)["t"][-1]
     if score_s is None:
-        mask, label = t >= t[-1] - 30.0 + 1e-9, "Baxter (real), 120 s -> 30 s"
+        label = "Baxter (real), 120 s -> 30 s" if train_s == (0.0, 120.0) else f"Baxter {train_s[0]:g}-{train_s[1]:g} s -> last 30 s"
+        score_s = (t_end - 30.0 + 1e-9, t_end + 1.0)
     else:
-        mask = (t >= score_s[0]) & (t < score_s[1])
         label = f"Baxter {train_s[0]:g}-{train_s[1]:g} -> {score_s[0]:g}-{score_s[1]:g} s"
-    if train_s != (0.0, 120.0) and score_s is None:
-        label = f"Baxter {train_s[0]:g}-{train_s[1]:g} s -> last 30 s"
-    overlap = np.any(mask & (t >= train_s[0]) & (t < train_s[1]))
-    if overlap:
-        raise SystemExit("--baxter-train and --baxter-score overlap: score on motion the fit never saw")
-    return compare(label, m, pinocchio_chain(urdf, m.joint_names), train, {"data": data, "mask": mask}, log)
+    return recording_points(log, urdf, m, path, train_s, score_s, torque_scale=torque_scale, label=label)
 
 
 def drop_rows(data, fraction, seed):
@@ -340,7 +403,9 @@ def timing(names, cfg, log, csv_dir=None, repeats=3):
             out = pathlib.Path(csv_dir) / f"{name}.csv"
             header = ["t"] + [f"{kind}.{j}" for kind in ("q", "qdot", "qddot", "tau") for j in m.joint_names]
             table = np.column_stack([train["t"]] + [np.asarray(train[kind]) for kind in ("q", "qdot", "qddot", "tau")])
-            np.savetxt(out, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+            partial = out.with_name(f".{out.name}.partial")
+            np.savetxt(partial, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+            partial.replace(out)
             log(f"wrote {out} (URDF: {path})")
         for hz in (None, 4.0):
             seconds = []
@@ -359,9 +424,26 @@ def main():
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--arms", nargs="*", help="MuJoCo arms (default: all of the arms table; with --urdf, that arm alone)")
-    parser.add_argument("--urdf", help="an arm of your own URDF, recorded in MuJoCo as the table's arms are")
+    parser.add_argument(
+        "--urdf",
+        help="an arm of your own URDF: the recorded arm's with --recording, else recorded in MuJoCo as the table's arms are",
+    )
     parser.add_argument("--base", help="with --urdf: the chain's base link (default: the URDF's root)")
     parser.add_argument("--tip", help="with --urdf: the chain's tip link (default: the end of the only chain)")
+    parser.add_argument(
+        "--recording",
+        metavar="CSV",
+        help="your own arm's free-motion CSV (t, q.J, qdot.J, qddot.J, tau.J; with --urdf), instead of the Baxter "
+        "recording and the MuJoCo arms (add --arms to run those too)",
+    )
+    parser.add_argument("--train", metavar="FROM,UNTIL", help="with --recording: the stretch fitted on, in s (default: all but the last fifth)")
+    parser.add_argument("--score", metavar="FROM,UNTIL", help="with --recording: the stretch scored, in s (default: the last fifth)")
+    parser.add_argument(
+        "--score-recording",
+        metavar="CSV",
+        help="with --recording: score on this other recording of the arm (--score: a stretch of it; default all of it, "
+        "and the whole of --recording fitted)",
+    )
     parser.add_argument("--no-baxter", action="store_true", help="leave out the real Baxter recording")
     parser.add_argument("--baxter-train", default="0,120", help="the Baxter stretch fitted on, FROM,UNTIL in s (0,120)")
     parser.add_argument("--baxter-score", help="the Baxter stretch scored, FROM,UNTIL in s (default: the last 30 s)")
@@ -385,10 +467,33 @@ def main():
         action="store_true",
         help="only time identify on non-repeating recordings of --arms (60 s at 1 kHz by default)",
     )
-    parser.add_argument("--write-csv", metavar="DIR", help="with --timing: write each recording to DIR/ARM.csv")
+    parser.add_argument("--write-csv", metavar="DIR", help="with --timing: write each recording to DIR/ARM.csv (made if missing; never over a file)")
     args = parser.parse_args()
+
+    def stretch(text, flag):
+        try:
+            a, b = (float(v) for v in text.split(","))
+        except ValueError:
+            parser.error(f"{flag} {text}: needs FROM,UNTIL in seconds")
+        if not a < b:
+            parser.error(f"{flag} {text}: FROM must come before UNTIL")
+        return (a, b)
+
+    stretches = {flag: stretch(text, f"--{flag.replace('_', '-')}") if text else None
+                 for flag, text in (("train", args.train), ("score", args.score), ("baxter_train", args.baxter_train), ("baxter_score", args.baxter_score))}
     urdf_arms = {}
-    if args.urdf:
+    if args.recording:
+        if not args.urdf:
+            parser.error("--recording needs --urdf (the recorded arm's URDF)")
+        if not pathlib.Path(args.urdf).is_file():
+            parser.error(f"--urdf {args.urdf}: no such file")
+        if args.timing:
+            parser.error("--timing times identify on MuJoCo arms (--arms), not on --recording")
+        if args.arms is None:
+            args.arms = []
+    elif args.train or args.score or args.score_recording:
+        parser.error("--train, --score and --score-recording go with --recording")
+    elif args.urdf:
         if not pathlib.Path(args.urdf).is_file():
             parser.error(f"--urdf {args.urdf}: no such file")
         urdf_arms[pathlib.Path(args.urdf).stem] = [str(pathlib.Path(args.urdf).resolve()), args.base, args.tip]
@@ -407,22 +512,32 @@ def main():
         print(text, flush=True)
 
     if args.timing:
+        if args.write_csv:
+            taken = [a for a in args.arms if (pathlib.Path(args.write_csv) / f"{a}.csv").exists()]
+            if taken:
+                parser.error(f"--write-csv {args.write_csv}: {taken[0]}.csv exists; remove it or choose another folder")
+            pathlib.Path(args.write_csv).mkdir(parents=True, exist_ok=True)
         timing(args.arms, cfg, log, args.write_csv)
         return
 
     log(f"{'recording':<28} {'input':>6} {'identify':>8} {'LS':>8} {'ratio':>7}  physical  (LS physical)   rms false torque, N m")
-    def stretch(text, flag):
+    if args.recording:
         try:
-            a, b = (float(v) for v in text.split(","))
-        except ValueError:
-            parser.error(f"{flag} {text}: needs FROM,UNTIL in seconds")
-        if not a < b:
-            parser.error(f"{flag} {text}: FROM must come before UNTIL")
-        return (a, b)
-
-    train_s = stretch(args.baxter_train, "--baxter-train")
-    score_s = stretch(args.baxter_score, "--baxter-score") if args.baxter_score else None
-    points = [] if args.no_baxter else baxter(log, args.torque_scale, train_s, score_s)
+            m = adm.Model.from_urdf(str(args.urdf), base=args.base, tip=args.tip)
+        except ValueError as e:
+            parser.error(str(e))
+        points = recording_points(
+            log,
+            pathlib.Path(args.urdf).resolve(),
+            m,
+            args.recording,
+            stretches["train"],
+            stretches["score"],
+            args.score_recording,
+            args.torque_scale,
+        )
+    else:
+        points = [] if args.no_baxter else baxter(log, args.torque_scale, stretches["baxter_train"], stretches["baxter_score"])
     for name in args.arms:
         points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows)
     ratios = [p["ratio"] for p in points]

@@ -123,16 +123,42 @@ def false_torque(ident, cond, cfg):
     return float(np.sqrt(np.mean((tau[start:] - predicted) ** 2)))
 
 
-def estimate_false_torque(ident, cond, cfg):
-    """Rms over joints of the default estimator's output in free motion after the warm-up
-    (N m): the momentum observer on ``ident`` (``momentum_gain``), on the conditioned
-    signals, through the loop's estimate low-pass, as the arms table runs it."""
+def estimate_after_warmup(ident, cond, cfg):
+    """The default estimator's output in free motion after the warm-up (samples x joints,
+    N m): the momentum observer on ``ident`` (``momentum_gain``), on the conditioned signals,
+    through the loop's estimate low-pass, as the arms table runs it."""
     from ._arms import ArmsConfig, lowpass, raw_estimate
 
     arms_cfg = ArmsConfig(dt=cfg.dt, estimate_cutoff_hz=cfg.estimate_cutoff_hz, warmup=cfg.warmup, momentum_gain=cfg.momentum_gain)
     hat = lowpass(raw_estimate(adm.MomentumObserver(ident, gain=cfg.momentum_gain), cond, arms_cfg), arms_cfg)
-    start = int(round(cfg.warmup / cfg.dt))
-    return float(np.sqrt(np.mean(hat[start:] ** 2)))
+    return hat[int(round(cfg.warmup / cfg.dt)) :]
+
+
+def estimate_false_torque(ident, cond, cfg):
+    """Rms over joints of :func:`estimate_after_warmup` (N m)."""
+    return float(np.sqrt(np.mean(estimate_after_warmup(ident, cond, cfg) ** 2)))
+
+
+#: Below this speed (rad/s, the conditioned velocity) a joint is reversing or held by its dry
+#: friction, whose torque there is anything up to its Coulomb level: no curve of the velocity
+#: gives it.
+SLOW_RAD_S = 0.01
+
+
+def estimate_by_speed(ident, cond, cfg):
+    """Where the estimate's false torque is, per joint: the share of samples after the
+    warm-up with ``|q'| < SLOW_RAD_S`` and the rms there and elsewhere (N m)."""
+    hat = estimate_after_warmup(ident, cond, cfg)
+    slow = np.abs(np.asarray(cond["qdot"], dtype=float)[int(round(cfg.warmup / cfg.dt)) :]) < SLOW_RAD_S
+
+    def rms(x):
+        return float(np.sqrt(np.mean(x**2))) if x.size else 0.0
+
+    return {
+        "slow_share": slow.mean(axis=0).tolist(),
+        "slow_rms": [rms(hat[slow[:, j], j]) for j in range(hat.shape[1])],
+        "elsewhere_rms": [rms(hat[~slow[:, j], j]) for j in range(hat.shape[1])],
+    }
 
 
 def run_payload(cfg: PayloadConfig, robots=None, log=print):
@@ -193,6 +219,11 @@ def run_payload(cfg: PayloadConfig, robots=None, log=print):
         "with_true_payload": estimate_false_torque(truth, cond_tool, cfg),
     }
     estimate["ratio_to_floor"] = estimate["with_payload_model"] / estimate["floor"]
+    estimate["by_speed"] = {
+        "slow_rad_s": SLOW_RAD_S,
+        "floor": estimate_by_speed(ident, cond_plain, cfg),
+        "with_payload_model": estimate_by_speed(carried, cond_tool, cfg),
+    }
     out = {
         "arm": cfg.arm,
         "tip": tip,
@@ -272,6 +303,15 @@ def main(argv=None):
     print(f"the estimate's false torque on other motion (momentum observer, rms, N m): floor without payload {e['floor']:.3f}; "
           f"with the payload: payload model {e['with_payload_model']:.3f} (ratio {e['ratio_to_floor']:.3f}), "
           f"identification alone {e['without_payload_model']:.3f}, the true payload {e['with_true_payload']:.3f}")
+    slow = e["by_speed"]
+    loaded, floor = slow["with_payload_model"], slow["floor"]
+    grown = [loaded["slow_share"][j] * loaded["slow_rms"][j] ** 2 + (1 - loaded["slow_share"][j]) * loaded["elsewhere_rms"][j] ** 2
+             - floor["slow_share"][j] * floor["slow_rms"][j] ** 2 - (1 - floor["slow_share"][j]) * floor["elsewhere_rms"][j] ** 2
+             for j in range(len(floor["slow_rms"]))]
+    j = int(np.argmax(grown))
+    print(f"  joint {j + 1}, whose estimate grows most: |q'| < {slow['slow_rad_s']} rad/s on {100 * loaded['slow_share'][j]:.1f} % of the samples, "
+          f"{loaded['slow_rms'][j]:.3f} N m there and {loaded['elsewhere_rms'][j]:.3f} elsewhere with the payload model "
+          f"(floor: {100 * floor['slow_share'][j]:.1f} %, {floor['slow_rms'][j]:.3f} and {floor['elsewhere_rms'][j]:.3f})")
     print(f"inverse-dynamics residual on other motion (rms, N m): floor without payload {r['false_torque_floor']:.3f}; with the payload: "
           f"payload model {r['false_torque_with_payload_model']:.3f} (ratio {r['ratio_to_floor']:.3f}), "
           f"identification alone {r['false_torque_without_payload_model']:.3f}, the true payload {r['false_torque_with_true_payload']:.3f}")

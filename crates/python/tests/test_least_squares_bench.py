@@ -1,0 +1,72 @@
+"""The least-squares bench on a user's own recording (scripts/bench/identify_vs_least_squares.py
+`--recording`): the free-motion CSV read by its column names, and every problem told before
+a fit (the fits themselves need Pinocchio, which the bench's own environment installs)."""
+
+import importlib.util
+
+import numpy as np
+import pytest
+
+import admittance as adm
+from conftest import BAXTER, ROOT
+
+
+def bench():
+    spec = importlib.util.spec_from_file_location("ls_bench", ROOT / "scripts" / "bench" / "identify_vs_least_squares.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def write_recording(path, m, rows, columns=None):
+    """A free-motion CSV of `rows` samples at 100 Hz, its columns shuffled (read by name)."""
+    names = ["t"] + [f"{key}.{j}" for key in ("q", "qdot", "qddot", "tau") for j in m.joint_names]
+    rng = np.random.default_rng(3)
+    table = np.column_stack([np.arange(rows) * 0.01] + [rng.normal(size=rows) for _ in names[1:]])
+    order = columns if columns is not None else list(rng.permutation(len(names)))
+    with open(path, "w") as f:
+        f.write(",".join(names[i] for i in order) + "\n")
+        for row in table:
+            f.write(",".join(repr(float(row[i])) for i in order) + "\n")
+    return table
+
+
+def test_a_recording_is_read_by_its_column_names(tmp_path):
+    m = adm.Model.from_urdf(str(BAXTER))
+    table = write_recording(tmp_path / "r.csv", m, 50)
+    data = bench().load_recording(tmp_path / "r.csv", m)
+    n = m.n
+    assert np.array_equal(data["t"], table[:, 0])
+    for k, key in enumerate(("q", "qdot", "qddot", "tau")):
+        assert np.array_equal(data[key], table[:, 1 + k * n : 1 + (k + 1) * n]), key
+
+
+def test_a_missing_column_and_time_going_back_are_named(tmp_path):
+    m = adm.Model.from_urdf(str(BAXTER))
+    b = bench()
+    names = 1 + 4 * m.n
+    write_recording(tmp_path / "short.csv", m, 20, columns=[i for i in range(names) if i != names - 1])
+    with pytest.raises(SystemExit, match=r"short\.csv: line 1: no column 'tau\.left_w2' \(1 of 29 missing\)"):
+        b.load_recording(tmp_path / "short.csv", m)
+    write_recording(tmp_path / "back.csv", m, 20, columns=list(range(names)))
+    lines = (tmp_path / "back.csv").read_text().splitlines()
+    lines[6] = "0" + lines[6][lines[6].index(",") :]  # the 6th sample at t = 0
+    (tmp_path / "back.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(SystemExit, match=r"back\.csv: line 7: time 0 s does not come after 0\.04 s"):
+        b.load_recording(tmp_path / "back.csv", m)
+    with pytest.raises(SystemExit, match=r"nowhere\.csv: no such file"):
+        b.load_recording(tmp_path / "nowhere.csv", m)
+
+
+def test_the_scored_rows_are_never_the_fitted_ones(tmp_path):
+    m = adm.Model.from_urdf(str(BAXTER))
+    b = bench()
+    write_recording(tmp_path / "r.csv", m, 1000)
+    args = dict(log=lambda s: None, urdf=BAXTER, m=m, path=tmp_path / "r.csv")
+    with pytest.raises(SystemExit, match="overlap"):
+        b.recording_points(**args, train_s=(0.0, 6.0), score_s=(5.0, 10.0))
+    # The same file given as the other recording is still the fitted one.
+    with pytest.raises(SystemExit, match="overlap"):
+        b.recording_points(**args, score_path=tmp_path / "r.csv")
+    with pytest.raises(SystemExit, match=r"--score: 50 rows scored \(at least 100\)"):
+        b.recording_points(**args, train_s=(0.0, 5.0), score_s=(5.0, 5.5))
