@@ -28,8 +28,9 @@ Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.c
 other free motion, `seed=2`, are scored; the plant, sensors and PD of that table).
 Your own arm's recording (`--recording CSV --urdf URDF [--base B --tip T]`: a free-motion CSV,
 columns `t, q.J, qdot.J, qddot.J, tau.J` for the chain's joints, as `admittance import`
-writes it) instead: fitted on `--train FROM,UNTIL` and scored on `--score FROM,UNTIL` (default:
-the last fifth scored, the rest fitted), or scored on another recording of the arm
+writes it; `qdot` and `qddot` may be left out, then taken by differences) instead: fitted
+on `--train FROM,UNTIL` and scored on `--score FROM,UNTIL` (default: the last fifth scored,
+the rest fitted), or scored on another recording of the arm
 (`--score-recording CSV`); the stretches never overlap. Joints outside the chain are held at 0
 in Pinocchio's model, whose regressor is checked against the project's RNEA first.
 `--torque-scale F` multiplies every recorded torque by F, training and scored alike: a torque
@@ -251,36 +252,47 @@ def scale_torque(data, factor):
 
 def load_recording(path, m):
     """A free-motion CSV (docs/outputs.md: columns ``t, q.J, qdot.J, qddot.J, tau.J`` for the
-    chain's joints ``J``; ``admittance import`` writes it) as arrays; a clear exit naming the
-    file when it is not one."""
+    chain's joints ``J``; ``admittance import`` writes it) as arrays; ``qdot`` or ``qddot``
+    left out for every joint is taken by backward differences, the first rows dropped, as the
+    project's loader does. A clear exit naming the file when it is not one."""
     path = pathlib.Path(path)
     if not path.is_file():
         raise SystemExit(f"{path}: no such file")
     with path.open() as f:
         header = [name.strip() for name in f.readline().split(",")]
     col = {name: i for i, name in enumerate(header)}
-    wanted = ["t"] + [f"{key}.{j}" for key in ("q", "qdot", "qddot", "tau") for j in m.joint_names]
+    groups = {key: [f"{key}.{j}" for j in m.joint_names] for key in ("q", "qdot", "qddot", "tau")}
+    derived = [key for key in ("qdot", "qddot") if not any(name in col for name in groups[key])]
+    wanted = ["t"] + [name for key, names in groups.items() if key not in derived for name in names]
     missing = [name for name in wanted if name not in col]
     if missing:
         raise SystemExit(
-            f"{path}: line 1: no column '{missing[0]}' ({len(missing)} of {len(wanted)} missing); the columns are "
-            f"t, q.J, qdot.J, qddot.J, tau.J for the chain's joints J: {', '.join(m.joint_names)} (--base, --tip)"
+            f"{path}: line 1: no column '{missing[0]}' ({len(missing)} missing); the columns are t, q.J, tau.J "
+            f"and qdot.J, qddot.J (or neither, then taken by differences) for the chain's joints J: "
+            f"{', '.join(m.joint_names)} (--base, --tip)"
         )
     try:
         table = np.loadtxt(path, delimiter=",", skiprows=1, usecols=[col[name] for name in wanted], ndmin=2)
     except ValueError as e:
         raise SystemExit(f"{path}: {e} (every row needs a number in each of the chain's columns)")
     t = table[:, 0]
-    if len(t) < 2 or not np.all(np.isfinite(table)):
-        raise SystemExit(f"{path}: {len(t)} rows{'' if len(t) < 2 else ', some not finite'}: needs a recording of finite numbers")
+    if len(t) < 3 or not np.all(np.isfinite(table)):
+        raise SystemExit(f"{path}: {len(t)} rows{'' if len(t) < 3 else ', some not finite'}: needs a recording of finite numbers")
     backwards = np.flatnonzero(np.diff(t) <= 0)
     if backwards.size:
         raise SystemExit(f"{path}: line {backwards[0] + 3}: time {t[backwards[0] + 1]:g} s does not come after {t[backwards[0]]:g} s")
     n = m.n
-    data = {"t": t}
-    for k, key in enumerate(("q", "qdot", "qddot", "tau")):
-        data[key] = table[:, 1 + k * n : 1 + (k + 1) * n]
-    return data
+    data, k = {"t": t}, 1
+    for key in ("q", "qdot", "qddot", "tau"):
+        if key in derived:
+            source = data["q"] if key == "qdot" else data["qdot"]
+            data[key] = np.vstack([np.full((1, n), np.nan), np.diff(source, axis=0) / np.diff(t)[:, None]])
+        else:
+            data[key], k = table[:, k : k + n], k + n
+    dropped = len(derived)  # a row per derivative taken in turn
+    if derived:
+        print(f"{path}: no {' and '.join(derived)} columns: taken as backward differences, the first {dropped} rows dropped")
+    return {key: value[dropped:] for key, value in data.items()}
 
 
 def recording_points(log, urdf, m, path, train_s=None, score_s=None, score_path=None, torque_scale=1.0, label=None):

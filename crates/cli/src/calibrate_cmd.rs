@@ -89,6 +89,7 @@ pub fn rows_between(
         qddot: cut(&data.qddot),
         tau: cut(&data.tau),
         joints: data.joints,
+        derived: data.derived,
     })
 }
 

@@ -18,8 +18,8 @@ mod payload;
 
 #[derive(Args)]
 pub struct IdentifyArgs {
-    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; docs/outputs.md). Required
-    /// unless --payload.
+    /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J, qdot and qddot optional;
+    /// docs/outputs.md). Required unless --payload.
     #[arg(long, default_value = "", hide_default_value = true, value_parser = payload::any_path)]
     data: PathBuf,
     #[command(flatten)]

@@ -42,7 +42,7 @@ use args::{
 #[derive(Args)]
 pub struct TrainArgs {
     /// Free-motion data (CSV: t, q.J, qdot.J, qddot.J, tau.J; any column order, extra
-    /// columns ignored).
+    /// columns ignored; qdot and qddot left out are taken by differences).
     #[arg(long)]
     data: PathBuf,
     /// The arm (`--urdf`, `--base`, `--tip`): the data must hold its joints' columns; the

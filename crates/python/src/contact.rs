@@ -14,7 +14,7 @@ use admittance_scenario::FreeMotionData;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use crate::convert::{config_error, free_motion_error, read_vector, value_error, vector_out};
+use crate::convert::{config_error, read_vector, value_error, vector_out};
 use crate::free_motion::{data_arg, DataArg};
 use crate::identification::PyIdentification;
 
@@ -125,9 +125,9 @@ pub fn load_contact_floor(path: PathBuf) -> PyResult<PyContactFloor> {
     Ok(PyContactFloor { floor })
 }
 
-fn free_motion(data: DataArg) -> PyResult<FreeMotionData> {
+fn free_motion(py: Python<'_>, data: DataArg) -> PyResult<FreeMotionData> {
     match data {
-        DataArg::Csv(path) => FreeMotionData::load(&path).map_err(free_motion_error),
+        DataArg::Csv(path) => crate::free_motion::load_csv(py, &path),
         DataArg::Arrays(d) => Ok(d),
     }
 }
@@ -166,11 +166,11 @@ pub fn calibrate_contact(
         grow_with_motion: !constant,
         ..Default::default()
     };
+    let recordings = given
+        .into_iter()
+        .map(|d| free_motion(py, d))
+        .collect::<PyResult<Vec<_>>>()?;
     let floor = py.detach(|| {
-        let recordings = given
-            .into_iter()
-            .map(free_motion)
-            .collect::<PyResult<Vec<_>>>()?;
         admittance_scenario::calibrate_contact_on_all(&recordings, &id, &observer, &config)
             .map_err(|e| config_error("calibrate_contact", e))
     })?;

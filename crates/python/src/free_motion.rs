@@ -117,6 +117,7 @@ fn dict_data(
         qdot,
         qddot,
         tau,
+        derived: Vec::new(),
     })
 }
 
@@ -211,6 +212,28 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
         .flat_map(|r| r[..n].iter().copied())
         .collect();
     repeat_period_of_positions(&q, n, folds)
+}
+
+/// Reads a free-motion CSV; warns (Python `UserWarning`) when the file leaves out `qdot` or
+/// `qddot`, which the loader then takes by differences.
+pub(crate) fn load_csv(py: Python<'_>, path: &std::path::Path) -> PyResult<FreeMotionData> {
+    let data = FreeMotionData::load(path).map_err(free_motion_error)?;
+    if !data.derived.is_empty() {
+        let message = std::ffi::CString::new(format!(
+            "{}: no {} columns: {}",
+            path.display(),
+            data.derived.join(" and "),
+            admittance_scenario::DERIVED_NOTE
+        ))
+        .unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            1,
+        )?;
+    }
+    Ok(data)
 }
 
 /// Warns (Python `UserWarning`) when `arg`'s time column has gaps, which the identification

@@ -101,7 +101,7 @@ fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<Free
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
     let (data, source) = match data_arg(data, arg, n, Some(&joints))? {
         DataArg::Csv(path) => (
-            FreeMotionData::load(&path).map_err(|e| value_error(e.to_string()))?,
+            crate::free_motion::load_csv(data.py(), &path)?,
             path.display().to_string(),
         ),
         DataArg::Arrays(d) => (d, format!("`{arg}`")),

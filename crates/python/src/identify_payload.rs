@@ -64,11 +64,7 @@ fn rows_before(
     }
     let joints: Vec<String> = model.joint_names().map(String::from).collect();
     let t = match crate::free_motion::data_arg(data, "data", model.nq(), Some(&joints))? {
-        crate::free_motion::DataArg::Csv(path) => {
-            admittance_scenario::FreeMotionData::load(&path)
-                .map_err(crate::convert::free_motion_error)?
-                .t
-        }
+        crate::free_motion::DataArg::Csv(path) => crate::free_motion::load_csv(data.py(), &path)?.t,
         crate::free_motion::DataArg::Arrays(d) => d.t,
     };
     let start = t.first().copied().unwrap_or(0.0);

@@ -288,3 +288,24 @@ def test_the_coulomb_width_is_chosen_on_held_out_motion(baxter, truth_and_data, 
     other = adm.identify(data, baxter, input_filter_hz=0.0, coulomb_width=0.02)
     chosen_err, other_err = (float(np.sqrt(np.mean((i.predict(q, qd, qdd) - truth) ** 2))) for i in (chosen, other))
     assert chosen_err < other_err, (chosen_err, other_err)
+
+
+def write_csv(path, data, joints, kinds=("q", "qdot", "qddot", "tau"), first=0):
+    header = ["t"] + [f"{k}.{j}" for k in kinds for j in joints]
+    table = np.column_stack([data["t"][first:]] + [np.asarray(data[k])[first:] for k in kinds])
+    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+
+
+def test_a_recording_without_velocities_and_accelerations(baxter, truth_and_data, tmp_path):
+    """A logger that writes only t, q and tau: the loader takes qdot and qddot by differences
+    and says so; at a cut-off, which conditions q and tau alone, the fit is the one of the
+    full recording without its first two rows (the ones no difference reaches)."""
+    _, data = truth_and_data
+    write_csv(tmp_path / "bare.csv", data, baxter.joint_names, kinds=("q", "tau"))
+    write_csv(tmp_path / "full.csv", data, baxter.joint_names, first=2)
+    with pytest.warns(UserWarning, match=r"bare\.csv: no qdot and qddot columns: taken as backward differences"):
+        bare = adm.identify(str(tmp_path / "bare.csv"), baxter, input_filter_hz=4.0, coulomb_width=0.01)
+    full = adm.identify(str(tmp_path / "full.csv"), baxter, input_filter_hz=4.0, coulomb_width=0.01)
+    assert bare.joint_terms == full.joint_terms
+    q, qd, qdd = (np.asarray(data[k])[:50] for k in ("q", "qdot", "qddot"))
+    assert np.array_equal(bare.predict(q, qd, qdd), full.predict(q, qd, qdd))

@@ -82,6 +82,7 @@ pub fn evenly_sampled(data: &FreeMotionData) -> Option<(FreeMotionData, Resampli
         qdot: Vec::with_capacity(rows * n),
         qddot: Vec::with_capacity(rows * n),
         tau: Vec::with_capacity(rows * n),
+        derived: data.derived.clone(),
     };
     let mut k = 0;
     for r in 0..rows {
@@ -124,6 +125,7 @@ mod tests {
             tau: t.iter().map(|t| 3.0 * t).collect(),
             q,
             t,
+            derived: Vec::new(),
         }
     }
 

@@ -10,7 +10,8 @@
 //! one row per control sample, comma separated (no quoting), a header naming the columns.
 //! The columns may come in any order and extra columns (of any content, text included)
 //! are ignored: only `t` and the `q`, `qdot`, `qddot`, `tau` columns of the joints are
-//! read. [`FreeMotionData::parse`] takes the joints in the order of the `q.*` columns;
+//! read. A file may leave out `qdot` or `qddot` for every joint: they are then taken by
+//! backward differences ([`DERIVED_NOTE`], `FreeMotionData::derived`). [`FreeMotionData::parse`] takes the joints in the order of the `q.*` columns;
 //! [`FreeMotionData::parse_joints`] / [`FreeMotionData::load_joints`] take the joints the
 //! caller names (an arm's chain order), so that a file whose columns are shuffled gives
 //! the same data. Every row is validated and the first problem is reported with its
@@ -20,6 +21,7 @@
 
 use std::path::Path;
 
+mod derivatives;
 mod layout;
 
 use layout::Layout;
@@ -50,7 +52,7 @@ pub enum FreeMotionError {
         message: String,
     },
     /// A required column is absent from the header.
-    #[error("{source_name}:{line}: missing column `{column}` (need t, and q.J, qdot.J, qddot.J, tau.J for every joint J: the arm's joints, or those of the q.J columns)")]
+    #[error("{source_name}:{line}: missing column `{column}` (need t, and q.J, tau.J and qdot.J, qddot.J for every joint J: the arm's joints, or those of the q.J columns; qdot or qddot left out for every joint is taken by differences)")]
     MissingColumn {
         /// The file.
         source_name: String,
@@ -168,7 +170,15 @@ pub struct FreeMotionData {
     pub qddot: Vec<f64>,
     /// Joint torques (the commanded torque, filtered as the run-time observer sees it).
     pub tau: Vec<f64>,
+    /// The derivatives the file left out for every joint (`"qdot"`, `"qddot"`), taken as
+    /// backward differences over the time column ([`DERIVED_NOTE`]); empty when it has them.
+    pub derived: Vec<String>,
 }
+
+/// How the loader fills the derivatives a file leaves out: as the conditioning stage and
+/// `admittance import` take them. The first rows, with no earlier sample, are dropped.
+pub const DERIVED_NOTE: &str =
+    "taken as backward differences (qdot of q, qddot of qdot) over the time column, the first rows dropped";
 
 impl FreeMotionData {
     /// Number of samples.
@@ -249,6 +259,7 @@ impl FreeMotionData {
             qdot: Vec::new(),
             qddot: Vec::new(),
             tau: Vec::new(),
+            derived: layout.derived.iter().map(|d| d.to_string()).collect(),
         };
         // The rows parsed in two contiguous stretches side by side (a 60 s recording at 1 kHz
         // is 35 MB of text), joined in order.
@@ -282,6 +293,16 @@ impl FreeMotionData {
             return Err(FreeMotionError::Empty {
                 source_name: src(),
                 message: "no data rows after the header".into(),
+            });
+        }
+        data.take_differences();
+        if data.t.is_empty() {
+            return Err(FreeMotionError::Empty {
+                source_name: src(),
+                message: format!(
+                    "no {} columns and too few rows to take them by differences (3 rows at least)",
+                    data.derived.join(" and ")
+                ),
             });
         }
         Ok(data)

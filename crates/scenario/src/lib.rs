@@ -70,7 +70,7 @@ pub use contact_score::ContactMetrics;
 pub use error::ScenarioError;
 pub use even_sampling::{evenly_sampled, Resampling};
 pub use external::{ExternalVariant, PlantStep};
-pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError};
+pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError, DERIVED_NOTE};
 pub use identify_recording::{
     conditioning_step_response_s, identify_recording, sample_rate_hz, ConditionedSamples,
     CutoffTrial, CUTOFF_CANDIDATES_HZ,

@@ -36,6 +36,16 @@ pub fn load(path: &Path, joints: Option<&[String]>) -> Result<FreeMotionData, Cl
         Some(j) => FreeMotionData::load_joints(path, j),
         None => FreeMotionData::load(path),
     };
+    if let Ok(data) = &result {
+        if !data.derived.is_empty() {
+            eprintln!(
+                "admittance: note: {}: no {} columns: {}",
+                path.display(),
+                data.derived.join(" and "),
+                admittance_scenario::DERIVED_NOTE
+            );
+        }
+    }
     result.map_err(|e| {
         let mut message = e.to_string();
         if let (FreeMotionError::MissingColumn { column, .. }, Some(j)) = (&e, joints) {

@@ -8,11 +8,16 @@ pub(super) struct Layout<'h> {
     pub columns: Vec<&'h str>,
     /// The joints, in the order of the data.
     pub joints: Vec<String>,
-    /// Field index of `t`, then of `q`, `qdot`, `qddot`, `tau` for every joint.
-    pub fields: Vec<usize>,
+    /// Field index of `t`, then of `q`, `qdot`, `qddot`, `tau` for every joint (`None`: a
+    /// derivative the file leaves out, taken by differences after reading).
+    pub fields: Vec<Option<usize>>,
+    /// The derivatives the file leaves out for every joint (`qdot`, `qddot`).
+    pub derived: Vec<&'static str>,
 }
 
 const SIGNALS: [&str; 4] = ["q", "qdot", "qddot", "tau"];
+/// The signals a file may leave out for every joint at once.
+const DERIVATIVES: [&str; 2] = ["qdot", "qddot"];
 
 /// The data rows of a contiguous stretch of the file, up to its first problem.
 pub(super) struct Stretch {
@@ -93,7 +98,9 @@ impl Layout<'_> {
             });
         }
         for (slot, &field) in self.fields.iter().enumerate() {
-            values[slot] = self.value(parts[field], field, slot, line_no, source_name)?;
+            if let Some(field) = field {
+                values[slot] = self.value(parts[field], field, slot, line_no, source_name)?;
+            }
         }
         Ok(())
     }
@@ -138,19 +145,30 @@ impl<'h> Layout<'h> {
                 .map(String::from)
                 .collect(),
         };
-        let mut fields = vec![find("t")?];
+        let mut fields = vec![Some(find("t")?)];
         if joints.is_empty() {
             return Err(missing("q.<joint>".into()));
         }
+        let mut derived = Vec::new();
         for prefix in SIGNALS {
-            for j in &joints {
-                fields.push(find(&format!("{prefix}.{j}"))?);
+            let names: Vec<String> = joints.iter().map(|j| format!("{prefix}.{j}")).collect();
+            // A derivative absent for every joint is taken by differences; one present for
+            // some joints only is a missing column.
+            if DERIVATIVES.contains(&prefix) && !names.iter().any(|n| columns.contains(&n.as_str()))
+            {
+                derived.push(prefix);
+                fields.extend(names.iter().map(|_| None));
+                continue;
+            }
+            for name in &names {
+                fields.push(Some(find(name)?));
             }
         }
         Ok(Self {
             columns,
             joints,
             fields,
+            derived,
         })
     }
 

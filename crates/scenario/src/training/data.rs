@@ -150,6 +150,7 @@ fn simulated_data(
         qdot: Vec::with_capacity(series.rows.len() * n),
         qddot: Vec::with_capacity(series.rows.len() * n),
         tau: Vec::with_capacity(series.rows.len() * n),
+        derived: Vec::new(),
     };
     // Columns: t, q.*, qdot.*, qddot.*, tau.* (runner.rs).
     for row in &series.rows {
