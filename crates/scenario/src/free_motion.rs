@@ -51,6 +51,14 @@ pub enum FreeMotionError {
         /// What is missing.
         message: String,
     },
+    /// The signals' units disagree (the time column against the velocities).
+    #[error("{source_name}: {message}")]
+    Units {
+        /// The file.
+        source_name: String,
+        /// What disagrees, by how much, and the fix.
+        message: String,
+    },
     /// A required column is absent from the header.
     #[error("{source_name}:{line}: missing column `{column}` (need t, and q.J, tau.J and qdot.J, qddot.J for every joint J: the arm's joints, or those of the q.J columns; qdot or qddot left out for every joint is taken by differences)")]
     MissingColumn {
@@ -296,6 +304,7 @@ impl FreeMotionData {
             });
         }
         data.take_differences();
+        data.check_velocities(source_name)?;
         if data.t.is_empty() {
             return Err(FreeMotionError::Empty {
                 source_name: src(),

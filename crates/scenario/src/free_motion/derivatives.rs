@@ -1,9 +1,11 @@
-//! The derivatives a free-motion CSV leaves out, taken by backward differences
-//! (`free_motion.rs`, [`DERIVED_NOTE`]).
+//! The derivatives of a free-motion CSV (`free_motion.rs`): taken by backward differences
+//! when the file leaves them out ([`DERIVED_NOTE`]), and the recorded velocities checked
+//! against the differences of the angles over the time column (a time in milliseconds, a
+//! velocity in degrees per second).
 
-use super::FreeMotionData;
 #[cfg(doc)]
 use super::DERIVED_NOTE;
+use super::{FreeMotionData, FreeMotionError};
 
 impl FreeMotionData {
     /// Fills the derivatives in `derived` by backward differences and drops the rows that
@@ -31,6 +33,60 @@ impl FreeMotionData {
             signal.drain(..dropped * n);
         }
     }
+}
+
+/// How far the recorded velocities may be from the angles' differences over the time
+/// column (their ratio) before the file is refused: filters and a half-sample lag move it by
+/// about 1 % (0.989 to 0.999 on the real Baxter recording's joints), a unit by 1000 or 57.
+const VELOCITY_RATIO: std::ops::RangeInclusive<f64> = 0.5..=2.0;
+/// ...when the velocities explain the differences at least this well (uncentred
+/// correlation; 0.93 to 0.99 on the real Baxter's joints): unrelated columns say nothing.
+const VELOCITY_CORRELATION: f64 = 0.8;
+/// Fewer rows than this say nothing about units.
+const MIN_ROWS: usize = 20;
+
+impl FreeMotionData {
+    /// Refuses a file whose recorded `qdot` disagrees in size with the differences of `q`
+    /// over `t`, all joints together: the time or the velocity is in another unit.
+    pub(super) fn check_velocities(&self, source_name: &str) -> Result<(), FreeMotionError> {
+        if self.derived.iter().any(|d| d == "qdot") || self.len() < MIN_ROWS {
+            return Ok(());
+        }
+        let n = self.dof();
+        let (mut dv, mut vv, mut dd) = (0.0, 0.0, 0.0);
+        for k in 1..self.len() {
+            let dt = self.t[k] - self.t[k - 1];
+            for i in 0..n {
+                let d = (self.q[k * n + i] - self.q[(k - 1) * n + i]) / dt;
+                // The velocity halfway between the two rows, where the difference is taken.
+                let v = 0.5 * (self.qdot[k * n + i] + self.qdot[(k - 1) * n + i]);
+                (dv, vv, dd) = (dv + d * v, vv + v * v, dd + d * d);
+            }
+        }
+        let ratio = dv / vv;
+        let correlation = dv / (dd * vv).sqrt();
+        if !(ratio.is_finite() && correlation >= VELOCITY_CORRELATION)
+            || VELOCITY_RATIO.contains(&ratio)
+        {
+            return Ok(());
+        }
+        Err(FreeMotionError::Units {
+            source_name: source_name.to_string(),
+            message: format!(
+                "the differences of q over t are {} times qdot, all joints together \
+                 (1 when t is in seconds and qdot in q's unit per second): t in milliseconds \
+                 reads 0.001, qdot in degrees per second of q in radians 0.0175; give t in \
+                 seconds and qdot in q's unit per second",
+                three_digits(ratio)
+            ),
+        })
+    }
+}
+
+/// `x` with three significant digits (0.00100, 0.0175, 131).
+fn three_digits(x: f64) -> String {
+    let decimals = (2.0 - x.abs().log10().floor()).clamp(0.0, 12.0) as usize;
+    format!("{x:.decimals$}")
 }
 
 /// Row `k` of `x` (row-major, `n` per row) minus row `k - 1`, over `t[k] - t[k - 1]`; row 0
@@ -99,6 +155,31 @@ mod tests {
         // A file with them reads as before.
         let full = parse(&format!("{HEADER}\n0,1,2,3,4,5,6,7,8\n")).unwrap();
         assert!(full.derived.is_empty() && full.len() == 1);
+    }
+
+    #[test]
+    fn a_time_in_milliseconds_or_velocities_in_degrees_are_refused() {
+        // q = sin t on two joints at 100 Hz, qdot = cos t: consistent in seconds.
+        let rows = |time_scale: f64, velocity_scale: f64| -> String {
+            (0..200)
+                .map(|k| {
+                    let t = 0.01 * k as f64;
+                    let (q, v) = (t.sin(), velocity_scale * t.cos());
+                    format!("{},{q},{q},{v},{v},0,0,1,2\n", t * time_scale)
+                })
+                .collect()
+        };
+        assert!(parse(&format!("{HEADER}\n{}", rows(1.0, 1.0))).is_ok());
+        let err = parse(&format!("{HEADER}\n{}", rows(1000.0, 1.0))).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("x.csv: the differences of q over t are 0.00100 times qdot"),
+            "{err}"
+        );
+        let err = parse(&format!("{HEADER}\n{}", rows(1.0, 57.29577951308232))).unwrap_err();
+        assert!(err.to_string().contains("are 0.0175 times qdot"), "{err}");
+        // Velocities unrelated to the angles (a column of zeros) say nothing about units.
+        assert!(parse(&format!("{HEADER}\n{}", rows(1000.0, 0.0))).is_ok());
     }
 
     #[test]
