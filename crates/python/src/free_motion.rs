@@ -218,6 +218,16 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
 /// `qddot`, which the loader then takes by differences.
 pub(crate) fn load_csv(py: Python<'_>, path: &std::path::Path) -> PyResult<FreeMotionData> {
     let data = FreeMotionData::load(path).map_err(free_motion_error)?;
+    if let Some(warning) = data.unlikely_rate() {
+        let message =
+            std::ffi::CString::new(format!("{}: {warning}", path.display())).unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            1,
+        )?;
+    }
     if !data.derived.is_empty() {
         let message = std::ffi::CString::new(format!(
             "{}: no {} columns: {}",

@@ -37,6 +37,9 @@ pub fn load(path: &Path, joints: Option<&[String]>) -> Result<FreeMotionData, Cl
         None => FreeMotionData::load(path),
     };
     if let Ok(data) = &result {
+        if let Some(warning) = data.unlikely_rate() {
+            eprintln!("admittance: warning: {}: {warning}", path.display());
+        }
         if !data.derived.is_empty() {
             eprintln!(
                 "admittance: note: {}: no {} columns: {}",

@@ -83,6 +83,28 @@ impl FreeMotionData {
     }
 }
 
+/// Below this many rows per second of `t`, a recording of a robot's joints is more likely
+/// timed in other units than seconds (the slowest here, the real Baxter's, is 100).
+const SLOWEST_LIKELY_RATE_HZ: f64 = 20.0;
+
+impl FreeMotionData {
+    /// A warning when the rows come fewer than [`SLOWEST_LIKELY_RATE_HZ`] per second of `t`:
+    /// a time in milliseconds, which a file without `qdot` columns cannot be checked for
+    /// ([`check_velocities`](Self::check_velocities)), reads 1000 times slower.
+    pub fn unlikely_rate(&self) -> Option<String> {
+        let span = self.t.last()? - self.t.first()?;
+        let rate = (self.len() - 1) as f64 / span;
+        (self.len() > 1 && rate < SLOWEST_LIKELY_RATE_HZ).then(|| {
+            format!(
+                "its rows come {} per second of t, fewer than a robot's recording holds \
+                 ({SLOWEST_LIKELY_RATE_HZ} or more): is t in seconds? (in milliseconds, a 1 kHz \
+                 recording reads 1 per second)",
+                three_digits(rate)
+            )
+        })
+    }
+}
+
 /// `x` with three significant digits (0.00100, 0.0175, 131).
 fn three_digits(x: f64) -> String {
     let decimals = (2.0 - x.abs().log10().floor()).clamp(0.0, 12.0) as usize;
@@ -180,6 +202,22 @@ mod tests {
         assert!(err.to_string().contains("are 0.0175 times qdot"), "{err}");
         // Velocities unrelated to the angles (a column of zeros) say nothing about units.
         assert!(parse(&format!("{HEADER}\n{}", rows(1000.0, 0.0))).is_ok());
+    }
+
+    #[test]
+    fn a_slow_time_column_is_questioned() {
+        let rows = |step: f64| -> String {
+            (0..30)
+                .map(|k| format!("{},{k},0,1,2\n", step * k as f64))
+                .collect()
+        };
+        let at = |step| parse(&format!("t,q.a,q.b,tau.a,tau.b\n{}", rows(step))).unwrap();
+        assert_eq!(at(0.01).unlikely_rate(), None);
+        let warning = at(1.0).unlikely_rate().unwrap();
+        assert!(
+            warning.starts_with("its rows come 1.00 per second of t"),
+            "{warning}"
+        );
     }
 
     #[test]
