@@ -19,7 +19,8 @@ pub(crate) enum DataArg {
 }
 
 /// The signals of a data dict: `t` `(N,)` and `q`, `qdot`, `qddot`, `tau` as `(N, n)`
-/// arrays, or the CSV column names (`q.JOINT`, ...) as `(N,)` arrays.
+/// arrays, or the CSV column names (`q.JOINT`, ...) as `(N,)` arrays; `qdot` or `qddot`
+/// left out is taken by differences (a `UserWarning` says so).
 fn dict_data(
     d: &Bound<'_, PyDict>,
     arg: &str,
@@ -52,7 +53,19 @@ fn dict_data(
         }
     }
     let mut signals: Vec<Vec<f64>> = Vec::with_capacity(4);
+    let mut derived = Vec::new();
     for sig in ["q", "qdot", "qddot", "tau"] {
+        // A derivative left out altogether (no array, no column of any joint) is taken by
+        // differences, as the CSV loader does.
+        let named = |j: &String| d.contains(format!("{sig}.{j}")).unwrap_or(false);
+        if matches!(sig, "qdot" | "qddot")
+            && !d.contains(sig)?
+            && !joints.is_some_and(|j| j.iter().any(named))
+        {
+            derived.push(sig.to_string());
+            signals.push(vec![0.0; rows_n * n]);
+            continue;
+        }
         let values = if let Some(obj) = d.get_item(sig)? {
             let name = format!("{arg}['{sig}']");
             if n == 1 {
@@ -108,7 +121,7 @@ fn dict_data(
     let qddot = signals.pop().unwrap_or_default();
     let qdot = signals.pop().unwrap_or_default();
     let q = signals.pop().unwrap_or_default();
-    Ok(FreeMotionData {
+    let mut data = FreeMotionData {
         joints: joints
             .map(<[String]>::to_vec)
             .unwrap_or_else(|| (0..n).map(|i| format!("joint{i}")).collect()),
@@ -117,8 +130,32 @@ fn dict_data(
         qdot,
         qddot,
         tau,
-        derived: Vec::new(),
-    })
+        derived,
+    };
+    data.check_velocities(&format!("`{arg}`"))
+        .map_err(|e| value_error(e.to_string()))?;
+    if !data.derived.is_empty() {
+        data.take_differences();
+        if data.is_empty() {
+            return Err(value_error(format!(
+                "`{arg}` has no {} and too few rows to take them by differences (3 at least)",
+                data.derived.join(" or ")
+            )));
+        }
+        let message = std::ffi::CString::new(format!(
+            "`{arg}`: no {}: {}",
+            data.derived.join(" and "),
+            admittance_scenario::DERIVED_NOTE
+        ))
+        .unwrap_or_default();
+        PyErr::warn(
+            d.py(),
+            &d.py().get_type::<pyo3::exceptions::PyUserWarning>(),
+            &message,
+            1,
+        )?;
+    }
+    Ok(data)
 }
 
 fn checked_rows(obj: &Bound<'_, PyAny>, name: &str, rows_n: usize, n: usize) -> PyResult<Vec<f64>> {

@@ -309,3 +309,19 @@ def test_a_recording_without_velocities_and_accelerations(baxter, truth_and_data
     assert bare.joint_terms == full.joint_terms
     q, qd, qdd = (np.asarray(data[k])[:50] for k in ("q", "qdot", "qddot"))
     assert np.array_equal(bare.predict(q, qd, qdd), full.predict(q, qd, qdd))
+
+
+def test_arrays_without_velocities_and_accelerations(baxter, truth_and_data, tmp_path):
+    """The same for a dict of arrays: the fit at a cut-off is the CSV's, and a time in
+    milliseconds is refused when velocities are given."""
+    _, data = truth_and_data
+    write_csv(tmp_path / "bare.csv", data, baxter.joint_names, kinds=("q", "tau"))
+    arrays = {"t": data["t"], "q": data["q"], "tau": data["tau"]}
+    with pytest.warns(UserWarning, match=r"`data`: no qdot and qddot: taken as backward differences"):
+        from_arrays = adm.identify(arrays, baxter, input_filter_hz=4.0, coulomb_width=0.01)
+    with pytest.warns(UserWarning, match="no qdot and qddot columns"):
+        from_csv = adm.identify(str(tmp_path / "bare.csv"), baxter, input_filter_hz=4.0, coulomb_width=0.01)
+    assert from_arrays.joint_terms == from_csv.joint_terms
+    in_ms = {**data, "t": 1000.0 * np.asarray(data["t"])}
+    with pytest.raises(ValueError, match=r"the differences of q over t are 0\.00100 times qdot"):
+        adm.identify(in_ms, baxter, input_filter_hz=4.0)

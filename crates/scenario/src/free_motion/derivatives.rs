@@ -8,9 +8,11 @@ use super::DERIVED_NOTE;
 use super::{FreeMotionData, FreeMotionError};
 
 impl FreeMotionData {
-    /// Fills the derivatives in `derived` by backward differences and drops the rows that
-    /// have no earlier sample (one per derivative taken in turn).
-    pub(super) fn take_differences(&mut self) {
+    /// Fills the derivatives named in `derived` (`"qdot"`, `"qddot"`) by backward
+    /// differences over `t` and drops the rows that have no earlier sample (one per
+    /// derivative taken in turn); the file loader calls it, and so may a caller that built
+    /// the data from arrays.
+    pub fn take_differences(&mut self) {
         let n = self.dof();
         let (qdot, qddot) = (
             self.derived.iter().any(|d| d == "qdot"),
@@ -48,7 +50,7 @@ const MIN_ROWS: usize = 20;
 impl FreeMotionData {
     /// Refuses a file whose recorded `qdot` disagrees in size with the differences of `q`
     /// over `t`, all joints together: the time or the velocity is in another unit.
-    pub(super) fn check_velocities(&self, source_name: &str) -> Result<(), FreeMotionError> {
+    pub fn check_velocities(&self, source_name: &str) -> Result<(), FreeMotionError> {
         if self.derived.iter().any(|d| d == "qdot") || self.len() < MIN_ROWS {
             return Ok(());
         }
