@@ -142,17 +142,13 @@ fn dict_data(
                 data.derived.join(" or ")
             )));
         }
-        let message = std::ffi::CString::new(format!(
-            "`{arg}`: no {}: {}",
-            data.derived.join(" and "),
-            admittance_scenario::DERIVED_NOTE
-        ))
-        .unwrap_or_default();
-        PyErr::warn(
+        warn(
             d.py(),
-            &d.py().get_type::<pyo3::exceptions::PyUserWarning>(),
-            &message,
-            1,
+            &format!(
+                "`{arg}`: no {}: {}",
+                data.derived.join(" and "),
+                admittance_scenario::DERIVED_NOTE
+            ),
         )?;
     }
     Ok(data)
@@ -178,7 +174,22 @@ pub(crate) fn data_arg(
         return dict_data(d, arg, n, joints).map(DataArg::Arrays);
     }
     match obj.extract::<PathBuf>() {
-        Ok(p) => Ok(DataArg::Csv(p)),
+        Ok(p) => {
+            // Said here, with the GIL: the file itself is read later, often without it.
+            let left_out = FreeMotionData::derivatives_left_out(&p, joints);
+            if !left_out.is_empty() {
+                warn(
+                    obj.py(),
+                    &format!(
+                        "{}: no {} columns: {}",
+                        p.display(),
+                        left_out.join(" and "),
+                        admittance_scenario::DERIVED_NOTE
+                    ),
+                )?;
+            }
+            Ok(DataArg::Csv(p))
+        }
         Err(_) => Err(PyTypeError::new_err(format!(
             "`{arg}` must be the path of a free-motion CSV file or a dict of arrays (t, q, qdot, qddot, tau)"
         ))),
@@ -251,36 +262,26 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
     repeat_period_of_positions(&q, n, folds)
 }
 
-/// Reads a free-motion CSV; warns (Python `UserWarning`) when the file leaves out `qdot` or
-/// `qddot`, which the loader then takes by differences.
+/// Reads a free-motion CSV; warns (Python `UserWarning`) when its rows come too slowly for a
+/// time in seconds (`FreeMotionData::unlikely_rate`). Derivatives it leaves out were said
+/// when the argument was read ([`data_arg`]).
 pub(crate) fn load_csv(py: Python<'_>, path: &std::path::Path) -> PyResult<FreeMotionData> {
     let data = FreeMotionData::load(path).map_err(free_motion_error)?;
     if let Some(warning) = data.unlikely_rate() {
-        let message =
-            std::ffi::CString::new(format!("{}: {warning}", path.display())).unwrap_or_default();
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &message,
-            1,
-        )?;
-    }
-    if !data.derived.is_empty() {
-        let message = std::ffi::CString::new(format!(
-            "{}: no {} columns: {}",
-            path.display(),
-            data.derived.join(" and "),
-            admittance_scenario::DERIVED_NOTE
-        ))
-        .unwrap_or_default();
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &message,
-            1,
-        )?;
+        warn(py, &format!("{}: {warning}", path.display()))?;
     }
     Ok(data)
+}
+
+/// A Python `UserWarning` with `message`.
+fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let message = std::ffi::CString::new(message).unwrap_or_default();
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &message,
+        1,
+    )
 }
 
 /// Warns (Python `UserWarning`) when `arg`'s time column has gaps, which the identification

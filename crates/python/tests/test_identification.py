@@ -325,3 +325,10 @@ def test_arrays_without_velocities_and_accelerations(baxter, truth_and_data, tmp
     in_ms = {**data, "t": 1000.0 * np.asarray(data["t"])}
     with pytest.raises(ValueError, match=r"the differences of q over t are 0\.00100 times qdot"):
         adm.identify(in_ms, baxter, input_filter_hz=4.0)
+
+
+def test_training_on_a_recording_without_derivatives_says_so(baxter, truth_and_data, tmp_path):
+    _, data = truth_and_data
+    write_csv(tmp_path / "bare.csv", data, baxter.joint_names, kinds=("q", "tau"))
+    with pytest.warns(UserWarning, match=r"bare\.csv: no qdot and qddot columns"):
+        adm.train(str(tmp_path / "bare.csv"), baxter, nodes=20, input_filter_hz=4.0)

@@ -228,6 +228,29 @@ impl FreeMotionData {
         Self::parse_impl(&text, &name, joints)
     }
 
+    /// The derivatives (`"qdot"`, `"qddot"`) the header of the file at `path` leaves out for
+    /// `joints` (the `q.*` columns' joints when `None`): those the loader will take by
+    /// differences. Reads the header alone; empty when it cannot be read or has a problem,
+    /// which loading the file then names.
+    pub fn derivatives_left_out<S: AsRef<str>>(path: &Path, joints: Option<&[S]>) -> Vec<String> {
+        use std::io::BufRead;
+        let Ok(file) = std::fs::File::open(path) else {
+            return Vec::new();
+        };
+        let header = std::io::BufReader::new(std::io::Read::take(file, 1 << 20))
+            .lines()
+            .map_while(Result::ok)
+            .find(|l| !l.trim().is_empty());
+        let joints: Option<Vec<&str>> = joints.map(|j| j.iter().map(AsRef::as_ref).collect());
+        header
+            .and_then(|h| {
+                Layout::from_header(&h, 1, "", joints.as_deref())
+                    .ok()
+                    .map(|l| l.derived.iter().map(|d| d.to_string()).collect())
+            })
+            .unwrap_or_default()
+    }
+
     /// Validates CSV text; `source_name` names it in errors. The joints are those of the
     /// `q.*` columns, in their order.
     pub fn parse(text: &str, source_name: &str) -> Result<Self, FreeMotionError> {
