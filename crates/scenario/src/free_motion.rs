@@ -383,9 +383,9 @@ pub fn observer_training_arrays(
 mod tests {
     use super::*;
 
-    const HEADER: &str = "t,q.a,q.b,qdot.a,qdot.b,qddot.a,qddot.b,tau.a,tau.b";
+    pub(super) const HEADER: &str = "t,q.a,q.b,qdot.a,qdot.b,qddot.a,qddot.b,tau.a,tau.b";
 
-    fn parse(body: &str) -> Result<FreeMotionData, FreeMotionError> {
+    pub(super) fn parse(body: &str) -> Result<FreeMotionData, FreeMotionError> {
         FreeMotionData::parse(body, "x.csv")
     }
 

@@ -128,13 +128,7 @@ fn backward_differences(t: &[f64], x: &[f64], n: usize) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{FreeMotionData, FreeMotionError};
-
-    const HEADER: &str = "t,q.a,q.b,qdot.a,qdot.b,qddot.a,qddot.b,tau.a,tau.b";
-
-    fn parse(body: &str) -> Result<FreeMotionData, FreeMotionError> {
-        FreeMotionData::parse(body, "x.csv")
-    }
+    use super::super::tests::{parse, HEADER};
 
     #[test]
     fn derivatives_left_out_for_every_joint_are_taken_by_differences() {
