@@ -11,7 +11,8 @@
 //! The columns may come in any order and extra columns (of any content, text included)
 //! are ignored: only `t` and the `q`, `qdot`, `qddot`, `tau` columns of the joints are
 //! read. A file may leave out `qdot` or `qddot` for every joint: they are then taken by
-//! backward differences ([`DERIVED_NOTE`], `FreeMotionData::derived`). [`FreeMotionData::parse`] takes the joints in the order of the `q.*` columns;
+//! backward differences ([`DERIVED_NOTE`], `FreeMotionData::derived`).
+//! [`FreeMotionData::parse`] takes the joints in the order of the `q.*` columns;
 //! [`FreeMotionData::parse_joints`] / [`FreeMotionData::load_joints`] take the joints the
 //! caller names (an arm's chain order), so that a file whose columns are shuffled gives
 //! the same data. Every row is validated and the first problem is reported with its
