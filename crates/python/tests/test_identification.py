@@ -332,3 +332,13 @@ def test_training_on_a_recording_without_derivatives_says_so(baxter, truth_and_d
     write_csv(tmp_path / "bare.csv", data, baxter.joint_names, kinds=("q", "tau"))
     with pytest.warns(UserWarning, match=r"bare\.csv: no qdot and qddot columns"):
         adm.train(str(tmp_path / "bare.csv"), baxter, nodes=20, input_filter_hz=4.0)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+def test_a_fifo_is_refused_not_waited_on(baxter, tmp_path):
+    # Its header is peeked at for missing derivatives before loading: a regular file only.
+    os.mkfifo(tmp_path / "pipe.csv")
+    with pytest.raises(OSError, match="not a regular file"):
+        adm.identify(str(tmp_path / "pipe.csv"), baxter)
+    with pytest.raises(OSError, match="not a regular file"):
+        adm.train(str(tmp_path / "pipe.csv"), baxter, nodes=20)

@@ -231,11 +231,11 @@ impl FreeMotionData {
 
     /// The derivatives (`"qdot"`, `"qddot"`) the header of the file at `path` leaves out for
     /// `joints` (the `q.*` columns' joints when `None`): those the loader will take by
-    /// differences. Reads the header alone; empty when it cannot be read or has a problem,
-    /// which loading the file then names.
+    /// differences. Reads the header alone, of a regular file only (a FIFO never blocks it);
+    /// empty when it cannot be read or has a problem, which loading the file then names.
     pub fn derivatives_left_out<S: AsRef<str>>(path: &Path, joints: Option<&[S]>) -> Vec<String> {
         use std::io::BufRead;
-        let Ok(file) = std::fs::File::open(path) else {
+        let Ok(file) = admittance_files::open_regular(path, admittance_files::DATA_LIMIT) else {
             return Vec::new();
         };
         let header = std::io::BufReader::new(std::io::Read::take(file, 1 << 20))
