@@ -295,12 +295,13 @@ def load_recording(path, m):
     return {key: value[dropped:] for key, value in data.items()}
 
 
-def recording_points(log, urdf, m, path, train_s=None, score_s=None, score_path=None, torque_scale=1.0, label=None):
-    """A real recording (a free-motion CSV of ``m``, the chain of ``urdf``): fitted on
-    ``train_s`` = [from, until) s (default: all but the last fifth, or the whole recording
-    when another one is scored), scored on ``score_s`` of ``score_path`` (default: the same
-    recording's last fifth, or the whole other recording); never on rows the fit saw."""
-    data = scale_torque(load_recording(path, m), torque_scale)
+def recording_points(log, urdf, m, path, train_s=None, score_s=None, score_path=None, torque_scale=1.0, label=None, data=None):
+    """A real recording (a free-motion CSV of ``m``, the chain of ``urdf``; ``data``: its
+    arrays when already read): fitted on ``train_s`` = [from, until) s (default: all but the
+    last fifth, or the whole recording when another one is scored), scored on ``score_s`` of
+    ``score_path`` (default: the same recording's last fifth, or the whole other recording);
+    never on rows the fit saw."""
+    data = scale_torque(load_recording(path, m) if data is None else data, torque_scale)
     t = data["t"]
     scored = data if score_path is None else scale_torque(load_recording(score_path, m), torque_scale)
     ts = scored["t"]
@@ -341,13 +342,14 @@ def baxter(log, torque_scale=1.0, train_s=(0.0, 120.0), score_s=None):
         return []
     urdf = ROOT / "models" / "baxter_left_arm.urdf"
     m = adm.Model.from_urdf(str(urdf))
-    t_end = load_recording(path, m)["t"][-1]
+    data = load_recording(path, m)
+    t_end = data["t"][-1]
     if score_s is None:
         label = "Baxter (real), 120 s -> 30 s" if train_s == (0.0, 120.0) else f"Baxter {train_s[0]:g}-{train_s[1]:g} s -> last 30 s"
         score_s = (t_end - 30.0 + 1e-9, t_end + 1.0)
     else:
         label = f"Baxter {train_s[0]:g}-{train_s[1]:g} -> {score_s[0]:g}-{score_s[1]:g} s"
-    return recording_points(log, urdf, m, path, train_s, score_s, torque_scale=torque_scale, label=label)
+    return recording_points(log, urdf, m, path, train_s, score_s, torque_scale=torque_scale, label=label, data=data)
 
 
 def drop_rows(data, fraction, seed):
@@ -445,7 +447,8 @@ def main():
     parser.add_argument(
         "--recording",
         metavar="CSV",
-        help="your own arm's free-motion CSV (t, q.J, qdot.J, qddot.J, tau.J; with --urdf), instead of the Baxter "
+        help="your own arm's free-motion CSV (t, q.J, qdot.J, qddot.J, tau.J, qdot and qddot optional; with --urdf), "
+        "instead of the Baxter "
         "recording and the MuJoCo arms (add --arms to run those too)",
     )
     parser.add_argument("--train", metavar="FROM,UNTIL", help="with --recording: the stretch fitted on, in s (default: all but the last fifth)")
