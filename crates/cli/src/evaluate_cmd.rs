@@ -53,7 +53,8 @@ pub struct EvaluateArgs {
     /// (another value is an error), else 0.
     #[arg(long, value_parser = non_negative_hz, allow_negative_numbers = true)]
     input_filter_hz: Option<f64>,
-    /// Momentum observer gain K_O (1/s).
+    /// Momentum observer gain K_O (1/s); beyond one over the sample period it is taken as
+    /// that (the estimate cannot follow faster than one sample).
     #[arg(long, default_value_t = 50.0, value_parser = positive_number)]
     gain: f64,
     /// A contact floor (`admittance calibrate-contact`): also count the false alarms it
@@ -193,11 +194,22 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
     let first = data.t.iter().take_while(|t| **t < args.from).count();
     if data.len() - first < 10 {
         return Err(CliError::usage(format!(
-            "--from {}: only {} rows of {} are at or after it",
+            "--from {}: only {} rows of {} are at or after it (its time runs from {} to {} s; \
+             --from is a time of that column)",
             args.from,
             data.len() - first,
-            args.data.display()
+            args.data.display(),
+            data.t.first().copied().unwrap_or(f64::NAN),
+            data.t.last().copied().unwrap_or(f64::NAN)
         )));
+    }
+    if args.from > 0.0 && first == 0 {
+        eprintln!(
+            "admittance: warning: --from {}: every row of {} is at or after it (its time starts at {} s): all of it is scored",
+            args.from,
+            args.data.display(),
+            data.t[0]
+        );
     }
     let n = arm.nq();
     let ident_file = match &args.identification {
@@ -357,8 +369,15 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
     let var: Vec<f64> = (0..n)
         .map(|i| (tau_sq[i] / count - (tau_sum[i] / count).powi(2)).max(1e-12))
         .collect();
+    let span = data.t[data.len() - 1] - data.t[0];
+    let rate = (data.len() - 1) as f64 / span;
+    let gain_note = if span > 0.0 && args.gain > rate {
+        format!("momentum observer gain {} /s at {rate:.0} Hz samples: taken as {rate:.0} /s (one sample's period; --gain)\n", args.gain)
+    } else {
+        String::new()
+    };
     let mut text = format!(
-        "{} rows of {} from t = {:.2} s ({:.1} s), no external force: every estimate is a false torque\ninput filter: {}\n{:<34} {:>8} {:>7}  per joint rms (N m)\n",
+        "{} rows of {} from t = {:.2} s ({:.1} s), no external force: every estimate is a false torque\ninput filter: {}\n{gain_note}{:<34} {:>8} {:>7}  per joint rms (N m)\n",
         data.len() - first, args.data.display(), data.t[first], data.t[data.len() - 1] - data.t[first],
         if filter > 0.0 { format!("{filter} Hz") } else { "none (the columns as recorded)".into() },
         "estimator", "rms N m", "nMSE"
@@ -402,6 +421,20 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             outside,
             data.len() - first
         );
+    }
+    if ident.is_some() {
+        let rms = |score: &Score| {
+            let c = score.count.max(1) as f64;
+            (score.sq.iter().sum::<f64>() / (c * n as f64)).sqrt()
+        };
+        let (urdf, fitted) = (rms(&statics[0]), rms(&statics[2]));
+        if fitted > urdf {
+            text += &format!(
+                "the identification predicts these rows worse than the URDF alone ({fitted:.3} against \
+                 {urdf:.3} N m): where they leave its training range (below) it extrapolates; \
+                 elsewhere check the recording's signs and units against the one identified\n"
+            );
+        }
     }
     if let Some(id) = &ident {
         text += &crate::training_range::report(id, &arm, &rows.q[first * n..]);

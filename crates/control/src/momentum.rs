@@ -16,8 +16,11 @@
 //! Discretisation (one [`Observer::update`] per control sample, period `dt`): the torque
 //! given at a sample is taken as the torque held over the period that just ended
 //! (rectangle rule), the model terms `C^T q' - G` are integrated by the trapezoidal rule,
-//! and `r` by the rectangle rule with its previous value (explicit, stable for
-//! `K_O dt < 2`). The first
+//! and `r` by the rectangle rule with its previous value (explicit: stable for
+//! `K_O dt < 2`, and without overshoot for `K_O dt <= 1`). A gain beyond one over the
+//! period is taken as `1 / dt` for that step: the estimate cannot follow faster than one
+//! sample, and the update stays stable at any sample rate (at 20 Hz the default 50 /s
+//! would otherwise diverge). The first
 //! update after construction or [`reset`](Observer::reset) sets `p0` and returns zero.
 
 use std::sync::Arc;
@@ -193,7 +196,8 @@ impl MomentumObserver {
         for i in 0..n {
             self.integral[i] += (input.tau_commanded[i] + self.r[i]) * dt
                 + 0.5 * (self.model_terms_prev[i] + self.model_terms[i]) * dt;
-            let r = self.gain[i] * (self.p[i] - self.integral[i] - self.p0[i]);
+            let gain = self.gain[i].min(1.0 / dt);
+            let r = gain * (self.p[i] - self.integral[i] - self.p0[i]);
             if !r.is_finite() {
                 return Err(Fault::NonFiniteEstimate { joint: i });
             }
@@ -258,11 +262,22 @@ mod tests {
         ext_start: f64,
         duration: f64,
     ) -> Vec<(f64, Vec<f64>)> {
+        simulate_sampled(truth, obs, tau_ext, ext_start, duration, 1e-3)
+    }
+
+    /// [`simulate`] with the observer sampled every `dt` (20 substeps of the arm each).
+    fn simulate_sampled(
+        truth: &Model,
+        obs: &mut MomentumObserver,
+        tau_ext: &[f64],
+        ext_start: f64,
+        duration: f64,
+        dt: f64,
+    ) -> Vec<(f64, Vec<f64>)> {
         let n = truth.nq();
         let mut data = Data::new(truth);
         let mut q = vec![0.0, -1.0, 1.19, 1.94, -0.67, 1.03, -0.5];
         let mut v = vec![0.0; n];
-        let dt = 1e-3;
         let sub = 20;
         let h = dt / sub as f64;
         let mut tau = vec![0.0; n];
@@ -314,6 +329,25 @@ mod tests {
             .flat_map(|(_, e)| e.iter().map(|x| x.abs()))
             .fold(0.0, f64::max);
         assert!(worst < 0.02, "free-motion estimate up to {worst} N m");
+    }
+
+    #[test]
+    fn stays_stable_when_the_gain_is_faster_than_the_samples() {
+        // 20 Hz samples and the default 50 /s: K_O dt = 2.5, where the explicit update
+        // grows by 1.5 times a step; the gain is taken as 1 / dt instead.
+        let model = baxter();
+        let mut obs =
+            MomentumObserver::new(model.clone(), &MomentumObserverConfig::default()).unwrap();
+        let tau_ext = [1.0, -2.0, 0.5, 1.5, -0.5, 0.3, 0.2];
+        let out = simulate_sampled(&model, &mut obs, &tau_ext, 1.0, 3.0, 0.05);
+        for (t, e) in out.iter().filter(|(t, _)| *t >= 1.5) {
+            for (i, (x, truth)) in e.iter().zip(&tau_ext).enumerate() {
+                assert!(
+                    (x - truth).abs() < 0.1 * truth.abs() + 0.05,
+                    "t = {t}: joint {i} estimates {x} N m of {truth}"
+                );
+            }
+        }
     }
 
     #[test]
