@@ -434,6 +434,36 @@ fn a_torque_of_another_size_than_the_urdf_scales_the_prior() {
     }
 }
 
+/// A recording that barely moves the joints (3 % of the motion above, each joint about its
+/// mid-range) leaves the URDF's gravity torque nearly constant, where the offsets take it:
+/// the torque's size cannot be read there, and is neither applied nor refused.
+#[test]
+fn a_recording_that_barely_moves_reads_no_torque_size() {
+    let urdf = common::baxter();
+    let n = urdf.nq();
+    let (mut q, mut qd, mut qdd) = motion(&urdf, 0.9, 10.0);
+    for (k, ((p, v), a)) in q.iter_mut().zip(&mut qd).zip(&mut qdd).enumerate() {
+        let j = &urdf.joints[k % n];
+        let mid = 0.5 * (j.limits.lower + j.limits.upper);
+        *p = mid + 0.03 * (*p - mid);
+        *v *= 0.03;
+        *a *= 0.03;
+    }
+    let mut tau = torques(&urdf, &truth_terms(n), &q, &qd, &qdd);
+    for (k, t) in tau.iter_mut().enumerate() {
+        *t += 0.5 * (2.0 * ((k as f64 * 78.233).sin() * 43758.5453).rem_euclid(1.0) - 1.0);
+    }
+    let r = [q, qd, qdd, tau];
+    let ident = identify(
+        &urdf,
+        &samples(&r),
+        None,
+        &IdentificationSettings::default(),
+    )
+    .unwrap();
+    assert_eq!(ident.summary.prior_scale, 1.0);
+}
+
 /// A recording that cannot be of the URDF's arm as written is refused, naming the joint or
 /// the unit: angles in degrees, one joint's torque sign flipped, a torque in mN m.
 #[test]
