@@ -143,8 +143,11 @@ pub fn rows_until(
     let rows = data.t.iter().take_while(|t| **t < until).count();
     if rows < 20 {
         return Err(CliError::usage(format!(
-            "--until {until}: only {rows} rows of {} are before it",
-            path.display()
+            "--until {until}: only {rows} rows of {} are before it (its time runs from {} to {} s; \
+             --until is a time of that column)",
+            path.display(),
+            data.t.first().copied().unwrap_or(f64::NAN),
+            data.t.last().copied().unwrap_or(f64::NAN)
         )));
     }
     Ok(rows)
@@ -287,6 +290,9 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     }
     text += &report(&arm, &ident, started.elapsed().as_secs_f64(), &args.out);
     crate::write_stdout(&text);
+    for warning in admittance_scenario::identification_warnings(&arm, &ident) {
+        eprintln!("admittance: warning: {warning}");
+    }
     Ok(())
 }
 

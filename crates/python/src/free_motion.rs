@@ -267,14 +267,17 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
 /// when the argument was read ([`data_arg`]).
 pub(crate) fn load_csv(py: Python<'_>, path: &std::path::Path) -> PyResult<FreeMotionData> {
     let data = FreeMotionData::load(path).map_err(free_motion_error)?;
-    if let Some(warning) = data.unlikely_rate() {
+    for warning in [data.unlikely_rate(), data.implausible_speed()]
+        .into_iter()
+        .flatten()
+    {
         warn(py, &format!("{}: {warning}", path.display()))?;
     }
     Ok(data)
 }
 
 /// A Python `UserWarning` with `message`.
-fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+pub(crate) fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
     let message = std::ffi::CString::new(message).unwrap_or_default();
     PyErr::warn(
         py,

@@ -190,6 +190,9 @@ pub fn identify(
             )
         })
         .map_err(value_error)?;
+    for warning in admittance_scenario::identification_warnings(&urdf, &ident) {
+        crate::free_motion::warn(py, &warning)?;
+    }
     Ok(PyIdentification {
         identification: Arc::new(ident),
         urdf,

@@ -165,8 +165,14 @@ def test_excitation_is_inside_the_limits_and_identifies(baxter):
     with pytest.warns(UserWarning, match=r"repeats every \d+ samples.*validation="):
         ident = adm.identify({**e, "tau": tau}, baxter)
     assert max(ident.summary["expected_false_torque_rms"]) < 0.05
+    # With a validation recording of other motion, nothing to say; the same rows as
+    # validation are the fit's own motion, and refused.
+    other = adm.excitation(baxter, 10.0, seed=4, range=float("inf"), velocity_fraction=1.0, acceleration_fraction=1.0)
+    other_tau = torques(baxter, other["q"], other["qdot"], other["qddot"], friction)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
+        adm.identify({**e, "tau": tau}, baxter, validation={**other, "tau": other_tau})
+    with pytest.raises(ValueError, match=r"validation recording repeats 4001 of its 4001 rows.*other motion"):
         adm.identify({**e, "tau": tau}, baxter, validation={**e, "tau": tau})
 
 

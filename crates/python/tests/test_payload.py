@@ -60,7 +60,9 @@ def test_with_payload_saves_a_file_every_consumer_loads(tmp_path, baxter):
     q, v, a = e["q"], e["qdot"], e["qddot"]
     tau_plain = np.array([adm.rnea(m, q[k], v[k], a[k]) for k in range(len(q))])
     data_plain = {**e, "tau": tau_plain}
-    base = adm.identify(data_plain, m, friction=False, validation=data_plain)
+    other = adm.excitation(m, 10.0, seed=5)
+    tau_other = np.array([adm.rnea(m, *row) for row in zip(other["q"], other["qdot"], other["qddot"])])
+    base = adm.identify(data_plain, m, friction=False, validation={**other, "tau": tau_other})
     carrying = base.with_payload(truth)
     tau_tool = np.asarray(carrying.predict(q, v, a)) - np.asarray(base.predict(q, v, a)) + tau_plain
     p = adm.identify_payload({**e, "tau": tau_tool}, base)

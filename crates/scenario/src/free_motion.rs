@@ -60,6 +60,16 @@ pub enum FreeMotionError {
         /// What disagrees, by how much, and the fix.
         message: String,
     },
+    /// The header is not a comma-separated list of names.
+    #[error("{source_name}:{line}: {message}")]
+    Header {
+        /// The file.
+        source_name: String,
+        /// The header line.
+        line: usize,
+        /// What is wrong, and the fix.
+        message: String,
+    },
     /// A required column is absent from the header.
     #[error("{source_name}:{line}: missing column `{column}` (need t, and q.J, tau.J and qdot.J, qddot.J for every joint J: the arm's joints, or those of the q.J columns; qdot or qddot left out for every joint is taken by differences)")]
     MissingColumn {
@@ -109,7 +119,7 @@ pub enum FreeMotionError {
         text: String,
     },
     /// A field is NaN or infinite.
-    #[error("{source_name}:{line}: column `{column}`: {value} is not finite")]
+    #[error("{source_name}:{line}: column `{column}`: {value} is not finite (repair the row or leave it out)")]
     NonFinite {
         /// The file.
         source_name: String,
@@ -135,7 +145,7 @@ pub enum FreeMotionError {
         limit: f64,
     },
     /// The time does not increase strictly.
-    #[error("{source_name}:{line}: time {time} does not increase (previous row: {previous})")]
+    #[error("{source_name}:{line}: time {time} does not increase (previous row: {previous}): each row needs a later time than the one before (remove a repeated row)")]
     NonMonotonicTime {
         /// The file.
         source_name: String,

@@ -98,6 +98,27 @@ fn repeat_period(data: &FreeMotionData, rows: usize, folds: usize) -> Option<usi
     admittance_learning::broad::repeat_period(&data.q[..rows * n], n, rows - rows / folds.max(2))
 }
 
+/// How many rows of `validation` equal one of the first `rows` rows of `train` in every
+/// position and torque, bit for bit.
+fn shared_rows(train: &FreeMotionData, rows: usize, validation: &FreeMotionData) -> usize {
+    let n = train.dof();
+    if n == 0 || validation.dof() != n {
+        return 0;
+    }
+    let key = |data: &FreeMotionData, k: usize| -> Vec<u64> {
+        let r = k * n..(k + 1) * n;
+        data.q[r.clone()]
+            .iter()
+            .chain(&data.tau[r])
+            .map(|v| v.to_bits())
+            .collect()
+    };
+    let seen: std::collections::HashSet<Vec<u64>> = (0..rows).map(|k| key(train, k)).collect();
+    (0..validation.len())
+        .filter(|&k| seen.contains(&key(validation, k)))
+        .count()
+}
+
 /// The sample rate of `data` (Hz) from its time column.
 pub fn sample_rate_hz(data: &FreeMotionData) -> f64 {
     let span = data.t.last().copied().unwrap_or(0.0) - data.t.first().copied().unwrap_or(0.0);
@@ -153,6 +174,20 @@ pub fn identify_recording(
     settings: &IdentificationSettings,
     input_filter_hz: Option<f64>,
 ) -> Result<(Identification, Vec<CutoffTrial>), String> {
+    if let Some(v) = validation {
+        let shared = shared_rows(train, rows.min(train.len()), v);
+        // A few equal rows can be two recordings starting at rest at the same pose; a
+        // hundredth of the validation is the training's motion itself.
+        if shared > 10 && shared * 100 >= v.len() {
+            return Err(format!(
+                "the validation recording repeats {shared} of its {} rows from the training rows \
+                 (the same file, or overlapping stretches of it): settings chosen there would be \
+                 chosen on motion the fit has seen; give a recording of other motion, or none \
+                 (blocked cross-validation over the training rows)",
+                v.len()
+            ));
+        }
+    }
     // Dropped samples put back on an even grid: the conditioning is a fixed-rate filter.
     let even_train = evenly_sampled(train);
     let rows = match &even_train {

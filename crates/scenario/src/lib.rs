@@ -43,6 +43,7 @@ mod gate_stage;
 mod gather;
 mod hand;
 mod hand_paths;
+mod identification_warnings;
 mod identify_recording;
 mod limits;
 mod metrics;
@@ -71,6 +72,7 @@ pub use error::ScenarioError;
 pub use even_sampling::{evenly_sampled, Resampling};
 pub use external::{ExternalVariant, PlantStep};
 pub use free_motion::{observer_training_arrays, FreeMotionData, FreeMotionError, DERIVED_NOTE};
+pub use identification_warnings::identification_warnings;
 pub use identify_recording::{
     conditioning_step_response_s, identify_recording, sample_rate_hz, ConditionedSamples,
     CutoffTrial, CUTOFF_CANDIDATES_HZ,

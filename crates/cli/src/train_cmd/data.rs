@@ -37,7 +37,10 @@ pub fn load(path: &Path, joints: Option<&[String]>) -> Result<FreeMotionData, Cl
         None => FreeMotionData::load(path),
     };
     if let Ok(data) = &result {
-        if let Some(warning) = data.unlikely_rate() {
+        for warning in [data.unlikely_rate(), data.implausible_speed()]
+            .into_iter()
+            .flatten()
+        {
             eprintln!("admittance: warning: {}: {warning}", path.display());
         }
         if !data.derived.is_empty() {

@@ -401,3 +401,64 @@ fn dropped_rows_and_a_torque_of_another_size_are_reported() {
         .unwrap();
     assert!((scale - 1.08).abs() < 0.01, "{line}");
 }
+
+/// `admittance identify` of the Baxter model on `data` at 4 Hz into `out`, with `extra`.
+fn identify_at_4_hz(data: &Path, out: &Path, extra: &[&str]) -> Output {
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let mut args = vec![
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--input-filter-hz",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    admittance(&args)
+}
+
+#[test]
+fn a_validation_recording_that_repeats_the_training_rows_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let train = synthetic_csv(dir.path(), 0.3, 12.0);
+    let out = dir.path().join("same.ident.json");
+    // The same file as validation, fitted on its first 8 s: its first 8 s are the fit's own.
+    let same = train.to_str().unwrap();
+    let o = identify_at_4_hz(&train, &out, &["--until", "8", "--validation", same]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("repeats") && text(&o).contains("other motion"),
+        "{}",
+        text(&o)
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn an_identification_of_a_shorter_chain_names_the_chain_it_was_made_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = synthetic_csv(dir.path(), 0.3, 12.0);
+    let out = dir.path().join("six.ident.json");
+    let o = identify_at_4_hz(&data, &out, &["--tip", "left_lower_forearm"]);
+    assert!(o.status.success(), "{}", text(&o));
+    // Evaluated on the whole arm (no --tip): the file says which chain it holds.
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let o = admittance(&[
+        "evaluate",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--identification",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("to left_lower_forearm") && text(&o).contains("--tip"),
+        "{}",
+        text(&o)
+    );
+}

@@ -135,8 +135,9 @@ impl Identification {
         let found = format!("{:016x}", urdf_model.fingerprint());
         if found != file.urdf_fingerprint {
             return Err(err(path, format!(
-                "was identified for another arm model ({} with fingerprint {}; this model '{}' has {found}): load it with the URDF it was made from",
-                file.urdf, file.urdf_fingerprint, urdf_model.source
+                "was identified for another arm model ({} from {} to {}, joints [{}], fingerprint {}; this model '{}' has {found}, joints [{}]): load it with the URDF it was made from and the same --base, --tip, --lock and --drop",
+                file.urdf, file.base, file.tip, file.joints.join(", "), file.urdf_fingerprint, urdf_model.source,
+                urdf_model.joint_names().collect::<Vec<_>>().join(", ")
             )));
         }
         Self::from_file(path, &file, urdf_model)

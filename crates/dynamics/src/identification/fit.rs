@@ -85,7 +85,7 @@ pub fn identify(
     settings.validate()?;
     let n = model.nq();
     check_sizes(train, validation, settings, n)?;
-    check_motion(train, "training samples")?;
+    check_motion(model, train, "training samples")?;
     // The URDF arm's torque on the training samples serves the checks and the prior's scale.
     let urdf_train = UrdfTorques::new(model, train, true);
     check_against_urdf(model, train, &urdf_train.total, "training samples")?;
@@ -439,9 +439,11 @@ fn strongest_within(scored: &[(f64, f64)], tolerance: f64) -> (f64, f64) {
 /// change cannot be identified, and the fit would only return the URDF with an infinite
 /// condition number) or carry no torque (a joint at exactly 0 in every sample: a missing
 /// column, which the fit would explain with a massless arm).
-fn check_motion(samples: &Samples, what: &str) -> Result<(), DynamicsError> {
+fn check_motion(model: &Model, samples: &Samples, what: &str) -> Result<(), DynamicsError> {
     let n = samples.dof;
+    let names: Vec<&str> = model.joint_names().collect();
     for i in 0..n {
+        let name = names.get(i).copied().unwrap_or("?");
         let (mut lo, mut hi, mut speed) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
         for k in 0..samples.len() {
             let q = samples.q[k * n + i];
@@ -451,14 +453,15 @@ fn check_motion(samples: &Samples, what: &str) -> Result<(), DynamicsError> {
         }
         if (0..samples.len()).all(|k| samples.tau[k * n + i] == 0.0) {
             return Err(DynamicsError::InvalidArgument(format!(
-                "{what}: joint {i}'s torque is 0 in every sample: identification needs the \
+                "{what}: joint {name}'s torque is 0 in every sample: identification needs the \
                  torque the joints measured or were commanded (check the tau columns)"
             )));
         }
         if !(hi - lo > 1e-3 && speed > 1e-3) {
             return Err(DynamicsError::InvalidArgument(format!(
-                "{what}: joint {i} does not move (range {:.2e} rad, top speed {speed:.2e} rad/s): \
-                 identification needs free motion of every joint (record an excitation: `admittance excite`)",
+                "{what}: joint {name} does not move (range {:.2e} rad, top speed {speed:.2e} rad/s): \
+                 identification needs free motion of every joint of the chain (record an \
+                 excitation: `admittance excite`), or a chain that ends before it (--tip)",
                 hi - lo
             )));
         }

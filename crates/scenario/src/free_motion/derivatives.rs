@@ -50,7 +50,10 @@ const MIN_ROWS: usize = 20;
 impl FreeMotionData {
     /// Refuses a file whose recorded `qdot` disagrees in size with the differences of `q`
     /// over `t`, all joints together: the time or the velocity is in another unit.
+    /// Also refuses a step of an angle by more than pi between two rows
+    /// ([`check_jumps`](Self::check_jumps)).
     pub fn check_velocities(&self, source_name: &str) -> Result<(), FreeMotionError> {
+        self.check_jumps(source_name)?;
         if self.derived.iter().any(|d| d == "qdot") || self.len() < MIN_ROWS {
             return Ok(());
         }
@@ -82,6 +85,73 @@ impl FreeMotionData {
                 three_digits(ratio)
             ),
         })
+    }
+}
+
+/// The first row `k` (with the joint) where `q` steps by more than `limit(dt)` from row
+/// `k - 1`.
+fn first_step_beyond(data: &FreeMotionData, limit: impl Fn(f64) -> f64) -> Option<(usize, usize)> {
+    let n = data.dof();
+    (1..data.len()).find_map(|k| {
+        let bound = limit(data.t[k] - data.t[k - 1]);
+        (0..n)
+            .find(|&i| (data.q[k * n + i] - data.q[(k - 1) * n + i]).abs() > bound)
+            .map(|i| (k, i))
+    })
+}
+
+/// Speeds (rad/s or m/s) no arm joint reaches: a step of `q` faster than this between two
+/// rows is a glitch of the encoder or the logger.
+const IMPLAUSIBLE_SPEED: f64 = 100.0;
+
+impl FreeMotionData {
+    /// Refuses a step of an angle by more than pi between two rows: a continuous joint's angle
+    /// wrapped at +-pi (or 0-2 pi), which the conditioning would take for a swing at thousands
+    /// of rad/s.
+    pub fn check_jumps(&self, source_name: &str) -> Result<(), FreeMotionError> {
+        let Some((k, i)) = first_step_beyond(self, |_| std::f64::consts::PI) else {
+            return Ok(());
+        };
+        let n = self.dof();
+        Err(FreeMotionError::Units {
+            source_name: source_name.to_string(),
+            message: format!(
+                "q.{} steps from {:.3} to {:.3} between t = {} and {} s, more than pi: a \
+                 continuous joint's angle wrapped at +-pi? give it unwrapped (numpy.unwrap), \
+                 or repair the rows",
+                self.joints[i],
+                self.q[(k - 1) * n + i],
+                self.q[k * n + i],
+                self.t[k - 1],
+                self.t[k]
+            ),
+        })
+    }
+
+    /// A warning when `q` steps faster than [`IMPLAUSIBLE_SPEED`] between two rows anywhere
+    /// (the first such step and how many rows do): rows a fit would take for motion.
+    pub fn implausible_speed(&self) -> Option<String> {
+        let (k, i) = first_step_beyond(self, |dt| IMPLAUSIBLE_SPEED * dt)?;
+        let n = self.dof();
+        let rows = (1..self.len())
+            .filter(|&r| {
+                let dt = self.t[r] - self.t[r - 1];
+                (0..n).any(|j| {
+                    (self.q[r * n + j] - self.q[(r - 1) * n + j]).abs() > IMPLAUSIBLE_SPEED * dt
+                })
+            })
+            .count();
+        let step = self.q[k * n + i] - self.q[(k - 1) * n + i];
+        Some(format!(
+            "q.{} moves {:.3} between t = {} and {} s ({} per second; no arm joint moves \
+             {IMPLAUSIBLE_SPEED} per second), and {rows} step(s) like it: encoder or logger \
+             glitches are fitted as motion; repair or remove those rows",
+            self.joints[i],
+            step,
+            self.t[k - 1],
+            self.t[k],
+            three_digits(step.abs() / (self.t[k] - self.t[k - 1]))
+        ))
     }
 }
 
@@ -212,6 +282,43 @@ mod tests {
         let warning = at(1.0).unlikely_rate().unwrap();
         assert!(
             warning.starts_with("its rows come 1.00 per second of t"),
+            "{warning}"
+        );
+    }
+
+    #[test]
+    fn a_wrapped_angle_is_refused_and_a_glitch_questioned() {
+        // Joint b turns at 2 rad/s through pi at 100 Hz; wrapped to +-pi it steps by 2 pi.
+        let rows = |wrap: bool, glitch: bool| -> String {
+            (0..100)
+                .map(|k| {
+                    let t = 0.01 * k as f64;
+                    let mut b = 2.5 + 2.0 * t;
+                    if wrap && b > std::f64::consts::PI {
+                        b -= 2.0 * std::f64::consts::PI;
+                    }
+                    let a = if glitch && k == 40 { 0.3 + 1.5 } else { 0.3 };
+                    format!("{t},{a},{b},0,2,0,0,1,2\n")
+                })
+                .collect()
+        };
+        let clean = parse(&format!("{HEADER}\n{}", rows(false, false))).unwrap();
+        assert_eq!(clean.implausible_speed(), None);
+        let err = parse(&format!("{HEADER}\n{}", rows(true, false))).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("q.b steps from 3.140 to -3.123 between t = 0.32 and 0.33 s")
+                && err.to_string().contains("numpy.unwrap"),
+            "{err}"
+        );
+        // One row 1.5 rad off: 150 rad/s there and back.
+        let warning = parse(&format!("{HEADER}\n{}", rows(false, true)))
+            .unwrap()
+            .implausible_speed()
+            .unwrap();
+        assert!(
+            warning.starts_with("q.a moves 1.500 between t = 0.39 and 0.4 s (150 per second")
+                && warning.contains("2 step(s)"),
             "{warning}"
         );
     }

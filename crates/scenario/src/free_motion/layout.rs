@@ -113,7 +113,32 @@ impl<'h> Layout<'h> {
         source_name: &str,
         joints: Option<&[&str]>,
     ) -> Result<Self, FreeMotionError> {
-        let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+        // A byte-order mark (spreadsheets' UTF-8 export) and quoted names (R's write.csv)
+        // are the header's dress, not its names.
+        let header = header.strip_prefix('\u{feff}').unwrap_or(header);
+        let columns: Vec<&str> = header
+            .split(',')
+            .map(|c| {
+                let c = c.trim();
+                c.strip_prefix('"')
+                    .and_then(|c| c.strip_suffix('"'))
+                    .unwrap_or(c)
+            })
+            .collect();
+        if columns.len() == 1 {
+            if let Some(separator) = [';', '\t', '|'].into_iter().find(|s| header.contains(*s)) {
+                return Err(FreeMotionError::Header {
+                    source_name: source_name.to_string(),
+                    line,
+                    message: format!(
+                        "the header has no commas but {:?}s: the file must be comma-separated \
+                         (t,q.J,...); save it with commas as the separator and a point as the \
+                         decimal mark",
+                        separator
+                    ),
+                });
+            }
+        }
         let missing = |column: String| FreeMotionError::MissingColumn {
             source_name: source_name.to_string(),
             line,
