@@ -171,7 +171,11 @@ pub(crate) fn data_arg(
     joints: Option<&[String]>,
 ) -> PyResult<DataArg> {
     if let Ok(d) = obj.cast::<PyDict>() {
-        return dict_data(d, arg, n, joints).map(DataArg::Arrays);
+        let data = dict_data(d, arg, n, joints)?;
+        if let Some(warning) = data.implausible_speed() {
+            warn(obj.py(), &format!("`{arg}`: {warning}"))?;
+        }
+        return Ok(DataArg::Arrays(data));
     }
     match obj.extract::<PathBuf>() {
         Ok(p) => {

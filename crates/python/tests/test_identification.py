@@ -348,3 +348,17 @@ def test_a_fifo_is_refused_not_waited_on(baxter, tmp_path):
         adm.identify(str(tmp_path / "pipe.csv"), baxter)
     with pytest.raises(OSError, match="not a regular file"):
         adm.train(str(tmp_path / "pipe.csv"), baxter, nodes=20)
+
+
+def test_a_recording_that_barely_moves_or_glitches_is_said(baxter):
+    # +-0.05 rad about mid-range: 0.1 rad of each joint's 2.7-6.1 rad, under 5 %.
+    small = adm.excitation(baxter, 10.0, seed=3, range=[0.05] * 7)
+    tau = np.array([adm.rnea(baxter, *r) for r in zip(small["q"], small["qdot"], small["qddot"])])
+    with pytest.warns(UserWarning, match=r"barely moves left_s0 \(0\.100 of 3\.40\).*admittance excite"):
+        ident = adm.identify({**small, "tau": tau}, baxter, input_filter_hz=4)
+    assert ident.summary["prior_scale"] == 1.0  # too little motion to read the torque's size
+    # One row of w2 1 rad off: hundreds of rad/s there and back.
+    q = small["q"].copy()
+    q[500, 6] += 1.0
+    with pytest.warns(UserWarning, match=r"q\.left_w2 moves 1\.00\d between .*2 step\(s\)"):
+        adm.identify({**small, "q": q, "tau": tau}, baxter, input_filter_hz=4)

@@ -64,3 +64,29 @@ pub fn identification_warnings(arm: &Model, ident: &Identification) -> Vec<Strin
     }
     warnings
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn joints_barely_moved_and_joints_worse_than_the_urdf_are_named() {
+        let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../models/baxter_left_arm.urdf");
+        let arm = Model::from_urdf_file(&urdf, None, None).unwrap();
+        let mut ident = Identification::from_model(arm.clone());
+        // s0 (limits +-1.7016) moved 0.1 rad: under 5 % of 3.40; the others over their range.
+        ident.summary.training_range = arm
+            .position_limits()
+            .enumerate()
+            .map(|(i, (lower, upper))| if i == 0 { [0.0, 0.1] } else { [lower, upper] })
+            .collect();
+        ident.summary.prior_false_torque_rms = vec![1.0; 7];
+        ident.summary.expected_false_torque_rms = vec![0.5, 1.2, 1.04, 0.5, 0.5, 0.5, 0.5];
+        let warnings = identification_warnings(&arm, &ident);
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+        assert!(warnings[0].starts_with("the recording barely moves left_s0 (0.100 of 3.40)"));
+        // s1 is 20 % worse than the URDF; e0's 4 % is within estimation noise.
+        assert!(warnings[1].starts_with("left_s1: the identification predicts its torque worse"));
+    }
+}
