@@ -124,8 +124,12 @@ impl<'c, 'a, 'i> Folder<'c, 'a, 'i> {
                 element,
                 format!(
                     "joint '{name}' is on the chain '{}' -> '{}': it is a coordinate of the model, \
-                     not a branch off it",
-                    self.tree.links[self.chain.base].name, self.tree.links[self.chain.tip].name
+                     not a branch off it (to hold it, end the chain before it, --tip {}, or \
+                     start it after, --base {})",
+                    self.tree.links[self.chain.base].name,
+                    self.tree.links[self.chain.tip].name,
+                    self.tree.links[self.tree.joints[j].parent].name,
+                    self.tree.links[self.tree.joints[j].child].name
                 ),
             ));
         }

@@ -208,6 +208,26 @@ fn unknown_names_in_lock_and_drop_are_errors_naming_them() {
 }
 
 #[test]
+fn locking_a_joint_of_the_chain_says_how_to_hold_it() {
+    let panda = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/franka_panda.urdf"),
+    )
+    .unwrap();
+    let options = UrdfOptions {
+        lock: vec![("panda_joint7".into(), 0.5)],
+        ..Default::default()
+    };
+    let err = Model::from_urdf_str_with(&panda, "franka_panda.urdf", &options)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("joint 'panda_joint7' is on the chain")
+            && err.contains("--tip panda_link6, or start it after, --base panda_link7"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_mimic_joint_on_the_chain_is_an_error_naming_it() {
     let text = arm("prismatic", "prismatic", "revolute");
     let options = UrdfOptions {
