@@ -88,11 +88,14 @@ impl FreeMotionData {
     }
 }
 
-/// The first row `k` (with the joint) where `q` steps by more than `limit(dt)` from row
-/// `k - 1`.
-fn first_step_beyond(data: &FreeMotionData, limit: impl Fn(f64) -> f64) -> Option<(usize, usize)> {
+/// The rows `k` (with the first joint of each) where `q` steps by more than `limit(dt)`
+/// from row `k - 1`.
+fn steps_beyond<'a>(
+    data: &'a FreeMotionData,
+    limit: impl Fn(f64) -> f64 + 'a,
+) -> impl Iterator<Item = (usize, usize)> + 'a {
     let n = data.dof();
-    (1..data.len()).find_map(|k| {
+    (1..data.len()).filter_map(move |k| {
         let bound = limit(data.t[k] - data.t[k - 1]);
         (0..n)
             .find(|&i| (data.q[k * n + i] - data.q[(k - 1) * n + i]).abs() > bound)
@@ -109,7 +112,7 @@ impl FreeMotionData {
     /// wrapped at +-pi (or 0-2 pi), which the conditioning would take for a swing at thousands
     /// of rad/s.
     pub fn check_jumps(&self, source_name: &str) -> Result<(), FreeMotionError> {
-        let Some((k, i)) = first_step_beyond(self, |_| std::f64::consts::PI) else {
+        let Some((k, i)) = steps_beyond(self, |_| std::f64::consts::PI).next() else {
             return Ok(());
         };
         let n = self.dof();
@@ -131,16 +134,10 @@ impl FreeMotionData {
     /// A warning when `q` steps faster than [`IMPLAUSIBLE_SPEED`] between two rows anywhere
     /// (the first such step and how many rows do): rows a fit would take for motion.
     pub fn implausible_speed(&self) -> Option<String> {
-        let (k, i) = first_step_beyond(self, |dt| IMPLAUSIBLE_SPEED * dt)?;
+        let mut steps = steps_beyond(self, |dt| IMPLAUSIBLE_SPEED * dt);
+        let (k, i) = steps.next()?;
+        let rows = 1 + steps.count();
         let n = self.dof();
-        let rows = (1..self.len())
-            .filter(|&r| {
-                let dt = self.t[r] - self.t[r - 1];
-                (0..n).any(|j| {
-                    (self.q[r * n + j] - self.q[(r - 1) * n + j]).abs() > IMPLAUSIBLE_SPEED * dt
-                })
-            })
-            .count();
         let step = self.q[k * n + i] - self.q[(k - 1) * n + i];
         Some(format!(
             "q.{} moves {:.3} between t = {} and {} s ({} per second; no arm joint moves \
