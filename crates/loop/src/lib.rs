@@ -56,6 +56,7 @@ mod chain;
 mod closed_loop;
 mod conditioning;
 mod config;
+mod continuous;
 mod delay;
 mod deployment;
 mod error;

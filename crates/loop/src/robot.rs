@@ -4,15 +4,19 @@
 //! status out.
 //!
 //! ```text
-//!   q, tau (raw) ──► plausibility gates ──► SignalChain ──► Measurement
-//!   Measurement, q_d (the caller's, or a hold of the first measured pose)
+//!   q, tau (raw) ──► continuous joints unwrapped ──► plausibility gates ──► SignalChain
+//!       ──► Measurement
+//!   Measurement, q_d (the caller's, continuous joints on the measured branch, or a hold
+//!       of the first measured pose)
 //!       ──► ClosedLoop (observer -> admittance -> controller) ──► tau_cmd, tau_ext_hat
 //!   tau_ext_hat ──► wrench at the tip, contact detector
 //! ```
 //!
 //! Safe by default: no step commands anything before every joint has delivered a valid
 //! angle (the command is zero and [`RobotStatus::waiting_for_angles`] says why), and
-//! without a desired motion from the caller the loop holds the first measured pose. After
+//! without a desired motion from the caller the loop holds the first measured pose. A
+//! continuous joint reported wrapped at +-pi (or in 0-2 pi) is kept on one branch: its
+//! angles in the reference and the estimate's inputs run on past the wrap. After
 //! construction a step allocates nothing and never panics.
 
 use std::path::Path;
@@ -25,6 +29,7 @@ use admittance_dynamics::Model;
 use crate::chain::SignalChain;
 use crate::closed_loop::{ClosedLoop, LoopInput};
 use crate::config::ObserverKind;
+use crate::continuous::ContinuousAngles;
 use crate::deployment::{Deployment, LOOP_FILE};
 use crate::error::LoopError;
 use crate::gates::{GateFault, PlausibilityGates};
@@ -98,6 +103,7 @@ pub struct RobotLoop {
     closed_loop: ClosedLoop,
     chain: SignalChain,
     gates: PlausibilityGates,
+    continuous: ContinuousAngles,
     warmup: f64,
     q_in: Vec<f64>,
     qdot_in: Vec<f64>,
@@ -186,6 +192,7 @@ impl RobotLoop {
             )),
             None => None,
         };
+        let continuous = ContinuousAngles::new(&model);
         let warmup = match config.observer.kind {
             ObserverKind::None | ObserverKind::Oracle => 0.0,
             _ => config.observer.warmup,
@@ -197,6 +204,7 @@ impl RobotLoop {
             closed_loop,
             chain,
             gates,
+            continuous,
             warmup,
             q_in: vec![0.0; n],
             qdot_in: vec![0.0; n],
@@ -263,6 +271,9 @@ impl RobotLoop {
         let mut nonfinite_input = !finite(input.q);
         self.q_in.fill(f64::NAN);
         copy(&mut self.q_in, input.q);
+        // A continuous joint's reading wrapped at +-pi is brought back to its branch before
+        // the jump gate sees it.
+        self.continuous.unwrap(&mut self.q_in);
         match input.tau {
             Some(tau) => {
                 nonfinite_input |= !finite(tau);
@@ -273,6 +284,7 @@ impl RobotLoop {
         }
         let measured_tau = input.tau.is_some().then_some(&mut self.tau_in[..]);
         let implausible = self.gates.check(input.time, &mut self.q_in, measured_tau);
+        self.continuous.accept(&self.q_in);
         for (seen, q) in self.seen_angle.iter_mut().zip(&self.q_in) {
             *seen |= q.is_finite();
         }
@@ -338,6 +350,7 @@ impl RobotLoop {
             Some([a, b, c]) => {
                 status.nonfinite_input |= !(finite(a) && finite(b) && finite(c));
                 copy(q_d, a);
+                self.continuous.align(q_d);
                 copy(qdot_d, b);
                 copy(qddot_d, c);
             }

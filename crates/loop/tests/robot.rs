@@ -596,3 +596,61 @@ fn an_angle_outside_the_identifications_training_range_is_flagged() {
     assert_eq!(flagged(&unrecorded, false), 0);
     assert!(flagged(&narrow, true) > 100);
 }
+
+#[test]
+fn a_continuous_joint_reported_wrapped_at_pi_runs_as_if_unwrapped() {
+    // Baxter's last wrist joint made continuous, turning through +-pi at 0.8 rad/s.
+    let text = std::fs::read_to_string(URDF).unwrap().replace(
+        r#"<joint name="left_w2" type="revolute">"#,
+        r#"<joint name="left_w2" type="continuous">"#,
+    );
+    let model = Model::from_urdf_str(&text, URDF, Some("base"), Some("left_hand")).unwrap();
+    let mut data = Data::new(&model);
+    let config = RobotConfig::from_toml_with(LOOP_TOML, Path::new("loop.toml"), &[]).unwrap();
+    let wrap = |x: f64| x.sin().atan2(x.cos());
+    let run = |wrapped: bool, data: &mut Data| {
+        let mut l = RobotLoop::new(model.clone(), &config, Path::new("."), None, None).unwrap();
+        let mut out = Vec::new();
+        for k in 0..3000 {
+            let (mut q, _) = motion(&model, data, k);
+            let t = k as f64 * 1e-3;
+            q[6] = 3.0 + 0.8 * t;
+            let v = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.8];
+            let mut tau = [0.0; 7];
+            tau.copy_from_slice(rnea(&model, data, &q, &v, &[0.0; 7]).unwrap().as_slice());
+            // The caller's desired angle 0.05 rad ahead, wrapped as the driver wraps.
+            let mut q_d = q;
+            q_d[6] += 0.05;
+            if wrapped {
+                q[6] = wrap(q[6]);
+                q_d[6] = wrap(q_d[6]);
+            }
+            let s = l.step(&RobotInput {
+                time: t,
+                q: &q,
+                qdot: None,
+                tau: Some(&tau),
+                desired: Some([&q_d, &v, &[0.0; 7]]),
+            });
+            out.push((
+                s.implausible,
+                l.torque().to_vec(),
+                l.external_torque_estimate().to_vec(),
+            ));
+        }
+        out
+    };
+    let straight = run(false, &mut data);
+    let wrapped = run(true, &mut data);
+    let mut gap: f64 = 0.0;
+    for (k, (a, b)) in straight.iter().zip(&wrapped).enumerate() {
+        assert_eq!(b.0, None, "step {k}: {:?}", b.0);
+        for i in 0..7 {
+            gap = gap
+                .max((a.1[i] - b.1[i]).abs())
+                .max((a.2[i] - b.2[i]).abs());
+        }
+    }
+    eprintln!("wrapped against unwrapped: commands and estimates within {gap:.2e}");
+    assert!(gap < 1e-6, "{gap}");
+}
