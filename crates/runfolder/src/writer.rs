@@ -31,7 +31,7 @@ pub fn write_series_csv(path: &Path, columns: &[String], rows: &[Vec<f64>]) -> s
 }
 
 /// Removes partial folders (`.NAME.partial-PID`) left in `parent` by runs that were
-/// killed: only those holding this tool's marker whose process no longer exists.
+/// killed: those holding this tool's marker, and empty ones, whose writer no longer runs.
 /// Returns the folders removed.
 pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
     let mut removed = Vec::new();
@@ -48,26 +48,60 @@ pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
             continue;
         };
         let path = e.path();
-        let ours = path.join(PARTIAL_MARKER).is_file();
-        if ours
-            && pid != std::process::id()
-            && !process_alive(pid)
-            && std::fs::remove_dir_all(&path).is_ok()
-        {
+        if pid == std::process::id() {
+            continue;
+        }
+        let gone = match std::fs::read_to_string(path.join(PARTIAL_MARKER)) {
+            Ok(marker) => !writer_running(pid, &marker) && std::fs::remove_dir_all(&path).is_ok(),
+            // Killed between creating the folder and writing its marker: an empty folder
+            // holds nothing of anyone's (`remove_dir` refuses any other).
+            Err(_) => !writer_running(pid, "") && std::fs::remove_dir(&path).is_ok(),
+        };
+        if gone {
             removed.push(path);
         }
     }
     removed
 }
 
-/// Whether a process exists (Linux: `/proc/PID`; elsewhere assumed alive, so nothing is
-/// removed that might still be written).
-fn process_alive(pid: u32) -> bool {
-    let proc = Path::new("/proc");
-    if !proc.join("self").exists() {
+/// The marker's line that records when its writer started (`/proc/PID/stat`'s start time).
+const STARTED_KEY: &str = "process_start_ticks=";
+
+/// The marker's text for this process.
+fn marker_text() -> String {
+    match process_start(std::process::id()) {
+        Some(ticks) => format!("admittance run in progress\n{STARTED_KEY}{ticks}\n"),
+        None => "admittance run in progress\n".into(),
+    }
+}
+
+/// Whether the process that wrote `marker` as `pid` still runs. Linux reuses a PID (and
+/// `/proc/PID` answers for a thread too; `pid_max` may be 32768), so a process found under
+/// the PID counts only when it started when the marker says its writer did; a marker
+/// without that line (an older one) trusts the PID. Elsewhere assumed running, so that
+/// nothing is removed that might still be written.
+fn writer_running(pid: u32, marker: &str) -> bool {
+    if !Path::new("/proc/self").exists() {
         return true;
     }
-    proc.join(pid.to_string()).exists()
+    let recorded = marker
+        .lines()
+        .find_map(|l| l.strip_prefix(STARTED_KEY))
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    match (recorded, process_start(pid)) {
+        (_, None) => Path::new("/proc").join(pid.to_string()).exists(),
+        (Some(recorded), Some(now)) => recorded == now,
+        (None, Some(_)) => true,
+    }
+}
+
+/// The start time of process `pid` in clock ticks since boot (`/proc/PID/stat`, field 22),
+/// if it exists and can be read.
+fn process_start(pid: u32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count after it.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    rest.split_whitespace().nth(19)?.parse().ok()
 }
 
 /// Writes the folder `out_dir` through a hidden partial sibling (`fill` writes into it; an
@@ -95,7 +129,7 @@ pub fn write_folder<E>(
     }
     std::fs::create_dir(&partial).map_err(|e| io(&partial, e))?;
     let marker = partial.join(PARTIAL_MARKER);
-    let result = std::fs::write(&marker, "admittance run in progress\n")
+    let result = std::fs::write(&marker, marker_text())
         .map_err(|e| io(&marker, e))
         .and_then(|_| fill(&partial));
     if let Err(e) = result {
@@ -168,5 +202,44 @@ mod tests {
         );
         assert!(!out.join("old.csv").exists() && !out.join(PARTIAL_MARKER).exists());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_partial_folder_whose_pid_now_names_another_process_is_stale() {
+        let Some(start) = process_start(std::process::id()) else {
+            return; // no /proc: every partial folder is kept
+        };
+        let dir = tempfile::tempdir().unwrap();
+        // PID 1 always runs; a marker that records another start time was written by an
+        // earlier process of that PID.
+        let init = process_start(1).expect("/proc/1/stat");
+        let partial = |name: &str, marker: String| {
+            let p = dir.path().join(name);
+            std::fs::create_dir(&p).unwrap();
+            std::fs::write(p.join(PARTIAL_MARKER), marker).unwrap();
+            p
+        };
+        let reused = partial(
+            ".a.partial-1",
+            format!("admittance run in progress\n{STARTED_KEY}{}\n", init + 1),
+        );
+        let running = partial(
+            ".b.partial-1",
+            format!("admittance run in progress\n{STARTED_KEY}{init}\n"),
+        );
+        let older = partial(".c.partial-1", "admittance run in progress\n".into());
+        // Killed before its marker was written: empty, and its PID runs nothing (pid_max
+        // is at most 2^22 on Linux).
+        let empty = dir.path().join(".d.partial-4999999");
+        std::fs::create_dir(&empty).unwrap();
+        let unmarked = dir.path().join(".e.partial-4999999");
+        std::fs::create_dir(&unmarked).unwrap();
+        std::fs::write(unmarked.join("user.txt"), "not ours").unwrap();
+        let mut removed = remove_stale_partials(dir.path());
+        removed.sort();
+        assert_eq!(removed, vec![reused.clone(), empty.clone()]);
+        assert!(!reused.exists() && !empty.exists());
+        assert!(running.exists() && older.exists() && unmarked.join("user.txt").exists());
+        assert!(marker_text().contains(&format!("{STARTED_KEY}{start}\n")));
     }
 }
