@@ -361,7 +361,10 @@ def drop_rows(data, fraction, seed):
     return {k: (np.asarray(v)[keep] if k in ("t", "q", "qdot", "qddot", "tau") else v) for k, v in data.items()}
 
 
-def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0):
+def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0, period=None):
+    """``period``: the training excitation's period in s (default: the arms table's, which
+    repeats; the training duration: motion that does not repeat, so that the identification
+    offers springs and judges them on held-out stretches)."""
     from admittance.mujoco import _arms
     from admittance.mujoco._plant import MujocoArm
 
@@ -369,7 +372,13 @@ def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0):
     m = adm.Model.from_urdf(str(path), base=base, tip=tip)
     tip = tip or m.tip_link
     arm = MujocoArm(path.read_text(), m.joint_names, tip, m.effort_limit, cfg.dt, cfg.friction_scale)
-    train_motion, _ = _arms.excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
+    if period is None:
+        train_motion, _ = _arms.excitation_motion(m, cfg.training_duration, cfg.training_seed, cfg.dt)
+    else:
+        e = adm.excitation(
+            m, cfg.training_duration, seed=cfg.training_seed, rate_hz=1.0 / cfg.dt, period=period, **_arms.WHOLE_RANGE
+        )
+        train_motion = {k: np.asarray(e[k]) for k in ("t", "q", "qdot", "qddot")}
     eval_motion, _ = _arms.excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
     gains = _arms.recording_gains(m, train_motion["q"].mean(axis=0), arm.terms)
     rng = np.random.default_rng(cfg.seed)
@@ -464,6 +473,12 @@ def main():
     parser.add_argument("--baxter-score", help="the Baxter stretch scored, FROM,UNTIL in s (default: the last 30 s)")
     parser.add_argument("--training-duration", type=float, default=60.0, help="MuJoCo training recording (s)")
     parser.add_argument("--evaluation-duration", type=float, default=30.0, help="MuJoCo scored recording (s)")
+    parser.add_argument(
+        "--training-period",
+        type=float,
+        help="the MuJoCo training excitation's period (s; default: the arms table's, which repeats); the training "
+        "duration gives motion that does not repeat, where springs are offered",
+    )
     parser.add_argument("--json", help="write every point to this file")
     parser.add_argument(
         "--drop-rows",
@@ -494,6 +509,8 @@ def main():
             parser.error(f"{flag} {text}: FROM must come before UNTIL")
         return (a, b)
 
+    if args.training_period is not None and not args.training_period > 0:
+        parser.error(f"--training-period {args.training_period}: needs a period > 0 s")
     stretches = {flag: stretch(text, f"--{flag.replace('_', '-')}") if text else None
                  for flag, text in (("train", args.train), ("score", args.score), ("baxter_train", args.baxter_train), ("baxter_score", args.baxter_score))}
     urdf_arms = {}
@@ -554,7 +571,7 @@ def main():
     else:
         points = [] if args.no_baxter else baxter(log, args.torque_scale, stretches["baxter_train"], stretches["baxter_score"])
     for name in args.arms:
-        points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows)
+        points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows, args.training_period)
     ratios = [p["ratio"] for p in points]
     if not ratios:
         sys.exit("no recording")

@@ -151,6 +151,28 @@ def test_real_baxter_held_out(baxter):
     assert rms <= 1.0 and nmse <= 0.4, (rms, nmse)
 
 
+@pytest.mark.skipif(not DATA or not (pathlib.Path(DATA) / "baxter_rand" / "baxter_rand.csv").exists(),
+                    reason="the real Baxter recording (set ADMITTANCE_DATA to the folder holding baxter_rand/)")
+def test_a_spring_is_judged_by_the_middle_held_out_stretch(baxter):
+    """Trained on the real Baxter's first 60 s at 10 Hz: the shoulder's gravity-assist spring
+    lowers the held-out error of four of the five stretches, and raises that of the last
+    one, whose positions lie beyond the others'. Judged by the sum it was refused and the fit
+    scored 3.24 N m rms on the last 30 s; judged by the middle stretch it is kept."""
+    csv = pathlib.Path(DATA) / "baxter_rand" / "baxter_rand.csv"
+    raw = np.loadtxt(csv, delimiter=",", skiprows=1)
+    t = raw[:, 0]
+    cols = {k: raw[:, 1 + 7 * j: 8 + 7 * j] for j, k in enumerate(["q", "qdot", "qddot", "tau"])}
+    train = t < 60.0
+    ident = adm.identify({"t": t[train], **{k: v[train] for k, v in cols.items()}}, baxter, input_filter_hz=10.0)
+    assert ident.summary["springs"][1], ident.summary["springs"]
+    cond = adm.InputConditioner(7, 10.0, 100.0)
+    rows = [cond.update(cols["q"][k], cols["tau"][k]) for k in range(len(t))]
+    last = [k for k in range(len(t)) if t[k] >= 120.0]
+    q, qd, qdd, tau = (np.array([rows[k][i] for k in last]) for i in range(4))
+    rms = np.sqrt(np.mean((tau - np.asarray(ident.predict(q, qd, qdd))) ** 2))
+    assert rms < 2.6, rms
+
+
 def test_excitation_is_inside_the_limits_and_identifies(baxter):
     # A simulated arm: the URDF's whole limits (the default envelope is for real arms).
     e = adm.excitation(baxter, 20.0, seed=3, range=float("inf"), velocity_fraction=1.0, acceleration_fraction=1.0)

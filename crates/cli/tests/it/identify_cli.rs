@@ -178,16 +178,17 @@ fn identify_baxter(
     (text(&r), file)
 }
 
-/// The real Baxter's first 60 s at 4 Hz: the shoulder's gravity-assist spring (not taken
-/// on those 60 s) pushes links against their size; `identify` names them and the file
-/// lists them, every mass within its bound.
+/// The real Baxter's first 60 s at 4 Hz without springs (`--no-springs`): the shoulder's
+/// gravity-assist spring, which the fit may then not take, pushes links against their size;
+/// `identify` names them and the file lists them, every mass within its bound.
 #[test]
 fn real_baxter_links_held_at_the_arms_size_are_named() {
     let Some(data) = baxter_recording() else {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let (printed, file) = identify_baxter(&data, "60", &[], &tmp.path().join("held.json"));
+    let no_springs = ["--no-springs"];
+    let (printed, file) = identify_baxter(&data, "60", &no_springs, &tmp.path().join("held.json"));
     let line = printed
         .lines()
         .find(|l| l.starts_with("bodies held at the arm's size"))
@@ -207,8 +208,8 @@ fn real_baxter_links_held_at_the_arms_size_are_named() {
         .step_by(10)
         .map(|m| m.as_f64().unwrap())
         .collect();
-    // Baxter's URDF: 5.70, 3.23, 4.31, 2.07, 2.25, 1.61, 0.54 kg (19.7 in all); the torque
-    // reads 1.035 times the URDF's, so the bound is 1.035 (2 m + 0.05 * 19.7).
+    // Baxter's URDF: 5.70, 3.23, 4.31, 2.07, 2.25, 1.61, 0.54 kg (19.7 in all); the bound is
+    // 2 m + 0.05 * 19.7, times the prior's scale (1 here; 1.04 allowed).
     let urdf_mass = [5.70, 3.23, 4.31, 2.07, 2.25, 1.61, 0.54];
     for (b, (m, u)) in masses.iter().zip(urdf_mass).enumerate() {
         assert!(
@@ -217,7 +218,7 @@ fn real_baxter_links_held_at_the_arms_size_are_named() {
         );
     }
     // `--max-mass-ratio none` lifts the bound: nothing is held, and the file says so.
-    let none = ["--max-mass-ratio", "none"];
+    let none = ["--no-springs", "--max-mass-ratio", "none"];
     let (printed, file) = identify_baxter(&data, "60", &none, &tmp.path().join("free.json"));
     assert!(!printed.contains("bodies held"), "{printed}");
     assert!(file["payload"]["summary"]["settings"]["max_mass_ratio"].is_null());

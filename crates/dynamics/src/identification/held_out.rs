@@ -93,22 +93,37 @@ impl Held<'_> {
                     None => f64::INFINITY,
                 }
             }
-            Held::Folds { blocks, total } => {
-                let total = at(total);
-                let errors = parallel_map(blocks, |b| {
-                    let b = at(b);
-                    let mut rest = total.clone();
-                    rest.sub(&b);
-                    fitter
-                        .fit(&rest, active, prior, ridge)
-                        .map_or(f64::INFINITY, |x| b.squared_error(&x))
-                });
-                if errors.len() != blocks.len() {
-                    return f64::INFINITY;
-                }
-                errors.iter().sum::<f64>() / total.rows as f64
-            }
+            Held::Folds { .. } => self
+                .fold_errors(fitter, active, prior, ridge, signals)
+                .map_or(f64::INFINITY, |(_, mean)| mean),
         }
+    }
+
+    /// Per held-out stretch, the squared error of the fit on the other stretches, and the
+    /// mean squared error over all of them (`None` for a validation recording, or when a
+    /// stretch's fit fails).
+    pub fn fold_errors(
+        &self,
+        fitter: Fitter<'_>,
+        active: &[bool],
+        prior: &DVector<f64>,
+        ridge: f64,
+        signals: &Signals,
+    ) -> Option<(Vec<f64>, f64)> {
+        let Held::Folds { blocks, total } = self else {
+            return None;
+        };
+        let total = total.at(signals);
+        let errors = parallel_map(blocks, |b| {
+            let b = b.at(signals);
+            let mut rest = total.clone();
+            rest.sub(&b);
+            fitter
+                .fit(&rest, active, prior, ridge)
+                .map_or(f64::INFINITY, |x| b.squared_error(&x))
+        });
+        let mean = errors.iter().sum::<f64>() / total.rows as f64;
+        (errors.len() == blocks.len() && mean.is_finite()).then_some((errors, mean))
     }
 
     /// The normal equations of all the training motion.
