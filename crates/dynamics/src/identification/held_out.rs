@@ -233,6 +233,25 @@ fn joint_weights(
         .collect())
 }
 
+/// The median over held-out stretches of the error with a candidate (a spring, a delay) over
+/// the error without. Over stretches a candidate is judged by the middle one, not by the
+/// sum: the sum can be decided by one stretch whose motion the others do not cover (the
+/// spring fitted without it extrapolates there, better or worse by chance; on the real
+/// Baxter recording that one stretch refused the shoulder's gravity-assist spring,
+/// docs/experiments.md, "Stretches that leave the training range").
+pub(super) fn median_ratio(before: &[f64], after: &[f64]) -> f64 {
+    let mut ratios: Vec<f64> = before
+        .iter()
+        .zip(after)
+        .map(|(b, a)| a / b.max(f64::MIN_POSITIVE))
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    ratios
+        .get(ratios.len() / 2)
+        .copied()
+        .unwrap_or(f64::INFINITY)
+}
+
 /// The candidate with the lowest score (`(NaN, inf)` when none is finite).
 pub(super) fn best_of<T>(candidates: impl Iterator<Item = (T, f64)>, none: T) -> (T, f64) {
     candidates.fold(

@@ -6,7 +6,7 @@
 use nalgebra::DVector;
 
 use crate::error::DynamicsError;
-use crate::identification::held_out::{Fitter, Held, Signals};
+use crate::identification::held_out::{median_ratio, Fitter, Held, Signals};
 use crate::identification::joint_terms::{JointTerms, FIRST_SPRING_FEATURE, JOINT_FEATURES};
 use crate::identification::samples::Samples;
 use crate::identification::Identification;
@@ -94,25 +94,6 @@ pub(super) fn choose_springs(
         (choice.ridge, choice.best) = choose_ridge(&choice.active, signals);
     }
     Ok(springs)
-}
-
-/// The median over held-out stretches of the error with a spring over the error without.
-/// Over stretches a spring is judged by the middle one, not by the sum: the sum is decided
-/// by a stretch whose positions lie beyond the others' (the spring fitted without it
-/// extrapolates there, better or worse by chance), and on the real Baxter recording that
-/// one stretch refused the shoulder's gravity-assist spring (docs/experiments.md, "Stretches
-/// that leave the training range").
-fn median_ratio(before: &[f64], after: &[f64]) -> f64 {
-    let mut ratios: Vec<f64> = before
-        .iter()
-        .zip(after)
-        .map(|(b, a)| a / b.max(f64::MIN_POSITIVE))
-        .collect();
-    ratios.sort_by(f64::total_cmp);
-    ratios
-        .get(ratios.len() / 2)
-        .copied()
-        .unwrap_or(f64::INFINITY)
 }
 
 /// Whether joint `i`'s offset and springs stay within what its motor can hold over its

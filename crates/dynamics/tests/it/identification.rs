@@ -554,3 +554,35 @@ fn bodies_stay_the_arms_size_and_those_held_there_are_named() {
     assert!(!bounded.summary.bodies_at_extent.is_empty());
     assert!(bounded.joint_terms.iter().all(|t| t.is_physical()));
 }
+
+/// A torque signal 10 ms late against the motion (a torque filter, a series-elastic joint):
+/// `identify` finds the delay on held-out stretches of one recording, every stretch gaining,
+/// and takes none where there is none.
+#[test]
+fn a_late_torque_signal_is_found_and_none_where_there_is_none() {
+    let urdf = common::baxter();
+    let terms = truth_terms(7);
+    let (q, qd, qdd) = motion(&urdf, 0.3, 30.0);
+    let tau = torques(&urdf, &terms, &q, &qd, &qdd);
+    let settings = IdentificationSettings {
+        sample_rate_hz: Some(200.0),
+        ..Default::default()
+    };
+    for lag in [0usize, 2] {
+        // The torque recorded with the motion's row k is the one of row k - lag.
+        let rows = q.len() / 7 - lag;
+        let train = Samples {
+            q: &q[7 * lag..],
+            qdot: &qd[7 * lag..],
+            qddot: &qdd[7 * lag..],
+            tau: &tau[..7 * rows],
+            dof: 7,
+        };
+        let ident = identify(&urdf, &train, None, &settings).unwrap();
+        let delay = ident.summary.delay_s[0];
+        assert!(
+            (delay - lag as f64 / 200.0).abs() < 1e-9,
+            "{lag} samples late: delay {delay} s"
+        );
+    }
+}
