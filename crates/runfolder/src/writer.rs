@@ -44,6 +44,7 @@ pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
             .strip_prefix('.')
             .and_then(|n| n.rsplit_once(".partial-"))
             .and_then(|(_, pid)| pid.parse::<u32>().ok())
+            .filter(|&pid| pid <= MAX_PID)
         else {
             continue;
         };
@@ -63,6 +64,10 @@ pub fn remove_stale_partials(parent: &Path) -> Vec<PathBuf> {
     }
     removed
 }
+
+/// Linux's largest `pid_max` (2^22): a longer number after `.partial-` is not a PID (a
+/// temporary folder's random suffix).
+const MAX_PID: u32 = 1 << 22;
 
 /// The marker's line that records when its writer started (`/proc/PID/stat`'s start time).
 const STARTED_KEY: &str = "process_start_ticks=";
@@ -228,11 +233,14 @@ mod tests {
             format!("admittance run in progress\n{STARTED_KEY}{init}\n"),
         );
         let older = partial(".c.partial-1", "admittance run in progress\n".into());
-        // Killed before its marker was written: empty, and its PID runs nothing (pid_max
-        // is at most 2^22 on Linux).
-        let empty = dir.path().join(".d.partial-4999999");
+        // Killed before its marker was written: empty, and its PID runs nothing (the
+        // largest one Linux allows, which no process here has).
+        let empty = dir.path().join(".d.partial-4194304");
         std::fs::create_dir(&empty).unwrap();
-        let unmarked = dir.path().join(".e.partial-4999999");
+        let unmarked = dir.path().join(".e.partial-4194304");
+        // Not a PID: a temporary folder's random digits.
+        let random = dir.path().join(".f.partial-48151623");
+        std::fs::create_dir(&random).unwrap();
         std::fs::create_dir(&unmarked).unwrap();
         std::fs::write(unmarked.join("user.txt"), "not ours").unwrap();
         let mut removed = remove_stale_partials(dir.path());
@@ -240,6 +248,7 @@ mod tests {
         assert_eq!(removed, vec![reused.clone(), empty.clone()]);
         assert!(!reused.exists() && !empty.exists());
         assert!(running.exists() && older.exists() && unmarked.join("user.txt").exists());
+        assert!(random.exists());
         assert!(marker_text().contains(&format!("{STARTED_KEY}{start}\n")));
     }
 }
