@@ -90,6 +90,7 @@ pub fn rows_between(
         tau: cut(&data.tau),
         joints: data.joints,
         derived: data.derived,
+        unwrapped: data.unwrapped,
     })
 }
 

@@ -131,7 +131,9 @@ fn dict_data(
         qddot,
         tau,
         derived,
+        unwrapped: Vec::new(),
     };
+    data.unwrap_turns();
     data.check_velocities(&format!("`{arg}`"))
         .map_err(|e| value_error(e.to_string()))?;
     if !data.derived.is_empty() {
@@ -172,7 +174,10 @@ pub(crate) fn data_arg(
 ) -> PyResult<DataArg> {
     if let Ok(d) = obj.cast::<PyDict>() {
         let data = dict_data(d, arg, n, joints)?;
-        if let Some(warning) = data.implausible_speed() {
+        for warning in [data.implausible_speed(), data.unwrapped_note()]
+            .into_iter()
+            .flatten()
+        {
             warn(obj.py(), &format!("`{arg}`: {warning}"))?;
         }
         return Ok(DataArg::Arrays(data));
@@ -271,9 +276,13 @@ pub(crate) fn repeat_period_of_rows(x: &[f64], n: usize, folds: usize) -> Option
 /// when the argument was read ([`data_arg`]).
 pub(crate) fn load_csv(py: Python<'_>, path: &std::path::Path) -> PyResult<FreeMotionData> {
     let data = FreeMotionData::load(path).map_err(free_motion_error)?;
-    for warning in [data.unlikely_rate(), data.implausible_speed()]
-        .into_iter()
-        .flatten()
+    for warning in [
+        data.unlikely_rate(),
+        data.implausible_speed(),
+        data.unwrapped_note(),
+    ]
+    .into_iter()
+    .flatten()
     {
         warn(py, &format!("{}: {warning}", path.display()))?;
     }

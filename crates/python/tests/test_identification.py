@@ -384,3 +384,18 @@ def test_a_recording_that_barely_moves_or_glitches_is_said(baxter):
     q[500, 6] += 1.0
     with pytest.warns(UserWarning, match=r"q\.left_w2 moves 1\.00\d between .*2 step\(s\)"):
         adm.identify({**small, "q": q, "tau": tau}, baxter, input_filter_hz=4)
+
+
+def test_an_angle_read_within_one_turn_is_the_same_motion(baxter, truth_and_data):
+    # w2 read in (-2 pi, 0], as a driver may report a continuous joint: a step of 2 pi at
+    # every crossing of zero. Given as arrays, it is put back on one branch, with a note.
+    _, data = truth_and_data
+    q = data["q"].copy()
+    assert q[0, 6] < 0 and (q[:, 6] > 0).sum() > 100
+    q[:, 6] = np.where(q[:, 6] > 0, q[:, 6] - 2 * np.pi, q[:, 6])
+    plain = adm.identify(data, baxter, input_filter_hz=4)
+    with pytest.warns(UserWarning, match=r"q\.left_w2 read within one turn"):
+        wrapped = adm.identify({**data, "q": q}, baxter, input_filter_hz=4)
+    np.testing.assert_allclose(wrapped.predict(q[:50], data["qdot"][:50], data["qddot"][:50]),
+                               plain.predict(data["q"][:50], data["qdot"][:50], data["qddot"][:50]), rtol=1e-6, atol=1e-6)
+    assert wrapped.summary["expected_false_torque_rms"] == pytest.approx(plain.summary["expected_false_torque_rms"], rel=1e-6)

@@ -83,6 +83,7 @@ pub fn evenly_sampled(data: &FreeMotionData) -> Option<(FreeMotionData, Resampli
         qddot: Vec::with_capacity(rows * n),
         tau: Vec::with_capacity(rows * n),
         derived: data.derived.clone(),
+        unwrapped: data.unwrapped.clone(),
     };
     let mut k = 0;
     for r in 0..rows {
@@ -126,6 +127,7 @@ mod tests {
             q,
             t,
             derived: Vec::new(),
+            unwrapped: Vec::new(),
         }
     }
 

@@ -24,6 +24,7 @@ use std::path::Path;
 
 mod derivatives;
 mod layout;
+mod wrapped;
 
 use layout::Layout;
 
@@ -175,7 +176,7 @@ impl FreeMotionError {
 }
 
 /// Validated free-motion samples; every per-joint signal is row-major, `samples x joints`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FreeMotionData {
     /// Joint names, in the order of the `q.*` columns.
     pub joints: Vec<String>,
@@ -192,6 +193,9 @@ pub struct FreeMotionData {
     /// The derivatives the file left out for every joint (`"qdot"`, `"qddot"`), taken as
     /// backward differences over the time column ([`DERIVED_NOTE`]); empty when it has them.
     pub derived: Vec<String>,
+    /// Joints whose angle the file gave wrapped within one turn, put back on one branch
+    /// (the loader's `unwrap_turns`; the caller may say so); empty when none.
+    pub unwrapped: Vec<String>,
 }
 
 /// How the loader fills the derivatives a file leaves out: as the conditioning stage and
@@ -302,6 +306,7 @@ impl FreeMotionData {
             qddot: Vec::new(),
             tau: Vec::new(),
             derived: layout.derived.iter().map(|d| d.to_string()).collect(),
+            unwrapped: Vec::new(),
         };
         // The rows parsed in two contiguous stretches side by side (a 60 s recording at 1 kHz
         // is 35 MB of text), joined in order.
@@ -337,6 +342,7 @@ impl FreeMotionData {
                 message: "no data rows after the header".into(),
             });
         }
+        data.unwrap_turns();
         data.take_differences();
         data.check_velocities(source_name)?;
         if data.t.is_empty() {

@@ -43,6 +43,9 @@ pub fn load(path: &Path, joints: Option<&[String]>) -> Result<FreeMotionData, Cl
         {
             eprintln!("admittance: warning: {}: {warning}", path.display());
         }
+        if let Some(note) = data.unwrapped_note() {
+            eprintln!("admittance: note: {}: {note}", path.display());
+        }
         if !data.derived.is_empty() {
             eprintln!(
                 "admittance: note: {}: no {} columns: {}",

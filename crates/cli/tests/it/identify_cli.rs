@@ -463,3 +463,78 @@ fn an_identification_of_a_shorter_chain_names_the_chain_it_was_made_for() {
         text(&o)
     );
 }
+
+#[test]
+fn an_angle_read_within_one_turn_is_identified_as_the_same_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = synthetic_csv(dir.path(), 0.3, 12.0);
+    // The last joint read in [0, 2 pi), as a driver may report a continuous joint: its
+    // negative angles a turn higher, a step of 2 pi at every crossing of zero.
+    let text_in = std::fs::read_to_string(&data).unwrap();
+    let mut lines = text_in.lines();
+    let header = lines.next().unwrap();
+    let column = header
+        .split(',')
+        .position(|c| c.trim() == "q.left_w2")
+        .unwrap();
+    let mut first_sign = None;
+    let mut crossings = 0;
+    let mut wrapped = format!("{header}\n");
+    for line in lines {
+        let mut fields: Vec<String> = line.split(',').map(String::from).collect();
+        let q: f64 = fields[column].trim().parse().unwrap();
+        let sign = *first_sign.get_or_insert(q >= 0.0);
+        crossings += usize::from((q >= 0.0) != sign);
+        if q < 0.0 {
+            fields[column] = format!("{}", q + std::f64::consts::TAU);
+        }
+        wrapped.push_str(&fields.join(","));
+        wrapped.push('\n');
+    }
+    assert_eq!(
+        first_sign,
+        Some(true),
+        "the test wants the first angle on [0, 2 pi)"
+    );
+    assert!(
+        crossings > 100,
+        "the joint crosses zero: {crossings} rows below it"
+    );
+    let wrapped_csv = dir.path().join("wrapped.csv");
+    std::fs::write(&wrapped_csv, wrapped).unwrap();
+    let (plain_out, wrapped_out) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let o = identify_at_4_hz(&data, &plain_out, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = identify_at_4_hz(&wrapped_csv, &wrapped_out, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("q.left_w2 read within one turn"),
+        "{}",
+        text(&o)
+    );
+    let numbers = |path: &Path, key: &str| -> Vec<f64> {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let mut out = Vec::new();
+        fn walk(v: &serde_json::Value, out: &mut Vec<f64>) {
+            match v {
+                serde_json::Value::Number(x) => out.push(x.as_f64().unwrap()),
+                serde_json::Value::Array(a) => a.iter().for_each(|x| walk(x, out)),
+                serde_json::Value::Object(o) => o.values().for_each(|x| walk(x, out)),
+                _ => {}
+            }
+        }
+        walk(&v["payload"][key], &mut out);
+        out
+    };
+    for key in ["inertial_parameters", "joint_terms"] {
+        let (a, b) = (numbers(&plain_out, key), numbers(&wrapped_out, key));
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (x - y).abs() <= 1e-6 * (1.0 + x.abs()),
+                "{key}: {x} against {y}"
+            );
+        }
+    }
+}

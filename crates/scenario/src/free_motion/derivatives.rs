@@ -105,12 +105,12 @@ fn steps_beyond<'a>(
 
 /// Speeds (rad/s or m/s) no arm joint reaches: a step of `q` faster than this between two
 /// rows is a glitch of the encoder or the logger.
-const IMPLAUSIBLE_SPEED: f64 = 100.0;
+pub(super) const IMPLAUSIBLE_SPEED: f64 = 100.0;
 
 impl FreeMotionData {
-    /// Refuses a step of an angle by more than pi between two rows: a continuous joint's angle
-    /// wrapped at +-pi (or 0-2 pi), which the conditioning would take for a swing at thousands
-    /// of rad/s.
+    /// Refuses a step of an angle by more than pi between two rows that the loader did not
+    /// read as a wrapped angle (`unwrap_turns`): the conditioning would take it for a swing
+    /// at thousands of rad/s.
     pub fn check_jumps(&self, source_name: &str) -> Result<(), FreeMotionError> {
         let Some((k, i)) = steps_beyond(self, |_| std::f64::consts::PI).next() else {
             return Ok(());
@@ -119,9 +119,8 @@ impl FreeMotionData {
         Err(FreeMotionError::Units {
             source_name: source_name.to_string(),
             message: format!(
-                "q.{} steps from {:.3} to {:.3} between t = {} and {} s, more than pi: a \
-                 continuous joint's angle wrapped at +-pi? give it unwrapped (numpy.unwrap), \
-                 or repair the rows",
+                "q.{} steps from {:.3} to {:.3} between t = {} and {} s, more than pi and not \
+                 a whole turn of an angle read within one turn: repair the rows",
                 self.joints[i],
                 self.q[(k - 1) * n + i],
                 self.q[k * n + i],
@@ -284,9 +283,9 @@ mod tests {
     }
 
     #[test]
-    fn a_wrapped_angle_is_refused_and_a_glitch_questioned() {
+    fn a_wrapped_angle_is_unwrapped_a_jump_refused_and_a_glitch_questioned() {
         // Joint b turns at 2 rad/s through pi at 100 Hz; wrapped to +-pi it steps by 2 pi.
-        let rows = |wrap: bool, glitch: bool| -> String {
+        let rows = |wrap: bool, glitch: f64| -> String {
             (0..100)
                 .map(|k| {
                     let t = 0.01 * k as f64;
@@ -294,22 +293,34 @@ mod tests {
                     if wrap && b > std::f64::consts::PI {
                         b -= 2.0 * std::f64::consts::PI;
                     }
-                    let a = if glitch && k == 40 { 0.3 + 1.5 } else { 0.3 };
+                    let a = if k == 40 { 0.3 + glitch } else { 0.3 };
                     format!("{t},{a},{b},0,2,0,0,1,2\n")
                 })
                 .collect()
         };
-        let clean = parse(&format!("{HEADER}\n{}", rows(false, false))).unwrap();
+        let clean = parse(&format!("{HEADER}\n{}", rows(false, 0.0))).unwrap();
         assert_eq!(clean.implausible_speed(), None);
-        let err = parse(&format!("{HEADER}\n{}", rows(true, false))).unwrap_err();
+        assert_eq!(clean.unwrapped_note(), None);
+        // Read wrapped, the angle is put back on its first row's branch: the clean recording.
+        let wrapped = parse(&format!("{HEADER}\n{}", rows(true, 0.0))).unwrap();
+        assert_eq!(wrapped.unwrapped, vec!["b".to_string()]);
+        assert!(wrapped
+            .unwrapped_note()
+            .unwrap()
+            .starts_with("q.b read within one turn"));
+        for (got, want) in wrapped.q.iter().zip(&clean.q) {
+            assert!((got - want).abs() < 1e-12, "{got} against {want}");
+        }
+        // A step of 4 rad there and back is no turn: refused, named.
+        let err = parse(&format!("{HEADER}\n{}", rows(false, 4.0))).unwrap_err();
         assert!(
             err.to_string()
-                .contains("q.b steps from 3.140 to -3.123 between t = 0.32 and 0.33 s")
-                && err.to_string().contains("numpy.unwrap"),
+                .contains("q.a steps from 0.300 to 4.300 between t = 0.39 and 0.4 s")
+                && err.to_string().contains("not a whole turn"),
             "{err}"
         );
         // One row 1.5 rad off: 150 rad/s there and back.
-        let warning = parse(&format!("{HEADER}\n{}", rows(false, true)))
+        let warning = parse(&format!("{HEADER}\n{}", rows(false, 1.5)))
             .unwrap()
             .implausible_speed()
             .unwrap();

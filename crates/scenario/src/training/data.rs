@@ -151,6 +151,7 @@ fn simulated_data(
         qddot: Vec::with_capacity(series.rows.len() * n),
         tau: Vec::with_capacity(series.rows.len() * n),
         derived: Vec::new(),
+        unwrapped: Vec::new(),
     };
     // Columns: t, q.*, qdot.*, qddot.*, tau.* (runner.rs).
     for row in &series.rows {
