@@ -20,20 +20,30 @@ pub(crate) struct ContinuousAngles {
     joints: Vec<usize>,
     /// Their last accepted angle (on the loop's branch), NaN before the first.
     last: Vec<f64>,
+    /// Per chain joint, whether it is continuous.
+    flags: Vec<bool>,
 }
 
 impl ContinuousAngles {
     /// The continuous joints of `model`.
     pub(crate) fn new(model: &Model) -> Self {
-        let joints: Vec<usize> = model
+        let flags: Vec<bool> = model
             .joints
             .iter()
-            .enumerate()
-            .filter(|(_, j)| j.kind == JointKind::Continuous)
-            .map(|(i, _)| i)
+            .map(|j| j.kind == JointKind::Continuous)
             .collect();
+        let joints: Vec<usize> = (0..flags.len()).filter(|&i| flags[i]).collect();
         let last = vec![f64::NAN; joints.len()];
-        Self { joints, last }
+        Self {
+            joints,
+            last,
+            flags,
+        }
+    }
+
+    /// Per chain joint, whether it is continuous (its angle counts on any turn).
+    pub(crate) fn flags(&self) -> &[bool] {
+        &self.flags
     }
 
     /// Moves each continuous joint's finite reading in `q` by whole turns to the branch

@@ -303,6 +303,7 @@ impl RobotLoop {
         let outside_training_range = admittance_dynamics::outside_training_range(
             self.closed_loop.observer_training_range(),
             &self.q_in,
+            self.continuous.flags(),
         );
         let mut status = RobotStatus {
             controller_fault: None,

@@ -654,3 +654,47 @@ fn a_continuous_joint_reported_wrapped_at_pi_runs_as_if_unwrapped() {
     eprintln!("wrapped against unwrapped: commands and estimates within {gap:.2e}");
     assert!(gap < 1e-6, "{gap}");
 }
+
+#[test]
+fn a_continuous_joint_turned_past_pi_stays_inside_a_training_range_a_turn_wide() {
+    // Baxter's last wrist joint made continuous, fitted over a turn of it ([-3.2, 3.2]), then
+    // turned from 3 rad through +-pi, reported wrapped: the loop's branch runs on past pi,
+    // where every angle is one the fit saw. A revolute joint's range holds no such turn.
+    let text = std::fs::read_to_string(URDF).unwrap().replace(
+        r#"<joint name="left_w2" type="revolute">"#,
+        r#"<joint name="left_w2" type="continuous">"#,
+    );
+    let model = Model::from_urdf_str(&text, URDF, Some("base"), Some("left_hand")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut ident = admittance_dynamics::Identification::from_model(model.clone());
+    ident.summary.training_range = POSE.iter().map(|&p| [p - 1.0, p + 1.0]).collect();
+    ident.summary.training_range[6] = [-3.2, 3.2];
+    let file = save_identification(tmp.path(), &model, &ident, "turn.json");
+    let mut l = loop_on_identification(&model, &file);
+    let mut data = Data::new(&model);
+    let wrap = |x: f64| x.sin().atan2(x.cos());
+    let (mut flagged, mut past_pi) = (0, 0);
+    for k in 0..3000 {
+        let (mut q, tau) = motion(&model, &mut data, k);
+        let angle = 3.0 + 0.8 * k as f64 * 1e-3;
+        past_pi += usize::from(angle > 3.2 * 1.02);
+        q[6] = wrap(angle);
+        let s = step_measured(&mut l, k, &q, &tau);
+        assert_eq!(s.implausible, None, "step {k}");
+        flagged += usize::from(s.outside_training_range);
+    }
+    assert!(past_pi > 2000, "{past_pi}");
+    assert_eq!(flagged, 0);
+    // The same range for a joint that cannot turn: the angles past it are outside.
+    let range = ident.summary.training_range[6];
+    assert!(admittance_dynamics::outside_training_range(
+        &[range],
+        &[4.0],
+        &[false]
+    ));
+    assert!(!admittance_dynamics::outside_training_range(
+        &[range],
+        &[4.0],
+        &[true]
+    ));
+}

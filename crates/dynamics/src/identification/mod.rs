@@ -47,7 +47,8 @@ pub use payload::identify_payload;
 pub use samples::Samples;
 pub use settings::{IdentificationSettings, COULOMB_WIDTH_CANDIDATES};
 pub use training_range::{
-    beyond_training_range, outside_training_range, RangeExcursion, TRAINING_RANGE_MARGIN,
+    beyond_training_range, beyond_training_range_of, outside_training_range, RangeExcursion,
+    TRAINING_RANGE_MARGIN,
 };
 
 use serde::{Deserialize, Serialize};

@@ -3,7 +3,10 @@
 //! recording; outside it they extrapolate, and no held-out stretch of the same recording
 //! says how well (docs/experiments.md, "Stretches that leave the training range").
 
+use std::f64::consts::TAU;
+
 use crate::identification::{Identification, Samples};
+use crate::model::JointKind;
 
 /// How far beyond its training range a position may lie before it counts as outside, as a
 /// share of the range's span: positions that close to the fitted ones are checked by
@@ -19,14 +22,33 @@ pub fn beyond_training_range([low, high]: [f64; 2], x: f64) -> (f64, bool) {
     (beyond, beyond > TRAINING_RANGE_MARGIN * (high - low))
 }
 
-/// Whether any joint's position `q` is outside its training range (beyond the margin);
-/// false for an empty range (none recorded) and for NaN. Allocation-free.
+/// [`beyond_training_range`] of a joint that may turn without limit (`continuous`): its
+/// dynamics repeat every turn, so its angle counts on the turn nearest the range (a range a
+/// turn wide or wider holds every angle), whichever branch the recording and the motion were
+/// read on.
 #[inline]
-pub fn outside_training_range(range: &[[f64; 2]], q: &[f64]) -> bool {
-    range
-        .iter()
-        .zip(q)
-        .any(|(r, &x)| beyond_training_range(*r, x).1)
+pub fn beyond_training_range_of(range: [f64; 2], x: f64, continuous: bool) -> (f64, bool) {
+    let [low, high] = range;
+    if !continuous {
+        return beyond_training_range(range, x);
+    }
+    if high - low >= TAU {
+        return (0.0, false);
+    }
+    let middle = 0.5 * (low + high);
+    let turns = ((x - middle) / TAU).round();
+    beyond_training_range(range, x - turns * TAU)
+}
+
+/// Whether any joint's position `q` is outside its training range (beyond the margin), the
+/// joints flagged in `continuous` counted on their nearest turn
+/// ([`beyond_training_range_of`]; a missing flag is false); false for an empty range (none
+/// recorded) and for NaN. Allocation-free.
+#[inline]
+pub fn outside_training_range(range: &[[f64; 2]], q: &[f64], continuous: &[bool]) -> bool {
+    range.iter().zip(q).enumerate().any(|(i, (r, &x))| {
+        beyond_training_range_of(*r, x, continuous.get(i).copied().unwrap_or(false)).1
+    })
 }
 
 /// How one joint's positions in other motion leave the training range.
@@ -57,8 +79,10 @@ pub(crate) fn training_range(samples: &Samples) -> Vec<[f64; 2]> {
 
 impl Identification {
     /// Per joint, how the positions `q` (row-major, one row of `n` per sample) leave the
-    /// summary's `training_range` by more than [`TRAINING_RANGE_MARGIN`] of its span; empty when the identification records none (files
-    /// written before it was recorded, or `from_model`) or `q` is not whole rows.
+    /// summary's `training_range` by more than [`TRAINING_RANGE_MARGIN`] of its span (a
+    /// continuous joint on its nearest turn: [`beyond_training_range_of`]); empty when the
+    /// identification records none (files written before it was recorded, or `from_model`)
+    /// or `q` is not whole rows.
     pub fn range_excursions(&self, q: &[f64]) -> Vec<RangeExcursion> {
         let range = &self.summary.training_range;
         let n = range.len();
@@ -73,11 +97,17 @@ impl Identification {
             };
             n
         ];
+        let continuous: Vec<bool> = self
+            .model
+            .joints
+            .iter()
+            .map(|j| j.kind == JointKind::Continuous)
+            .collect();
         for row in q.chunks_exact(n) {
-            for ((e, r), &x) in out.iter_mut().zip(range).zip(row) {
+            for (((e, r), &x), &turns) in out.iter_mut().zip(range).zip(row).zip(&continuous) {
                 e.lowest = e.lowest.min(x);
                 e.highest = e.highest.max(x);
-                let (beyond, outside) = beyond_training_range(*r, x);
+                let (beyond, outside) = beyond_training_range_of(*r, x, turns);
                 if outside {
                     e.samples_outside += 1;
                     e.furthest = e.furthest.max(beyond);
@@ -143,13 +173,45 @@ mod tests {
         assert!((e[0].furthest - 0.011).abs() < 1e-12);
         assert!(!outside_training_range(
             &ident.summary.training_range,
-            &near[..2]
+            &near[..2],
+            &[]
         ));
         assert!(outside_training_range(
             &ident.summary.training_range,
-            &near[2..]
+            &near[2..],
+            &[]
         ));
         // Not whole rows: nothing.
         assert!(ident.range_excursions(&other[..5]).is_empty());
+    }
+}
+
+#[cfg(test)]
+mod continuous_tests {
+    use super::*;
+
+    #[test]
+    fn a_continuous_joint_counts_on_the_turn_nearest_its_range() {
+        let range = [2.5, 3.5];
+        // A turn away, the same angle: inside for a continuous joint, outside for another.
+        for x in [3.0 - TAU, 3.0 + TAU, 3.0 + 3.0 * TAU] {
+            assert!(!beyond_training_range_of(range, x, true).1, "{x}");
+            assert!(beyond_training_range_of(range, x, false).1, "{x}");
+        }
+        // Beyond the range on every turn: outside by the same amount on each.
+        let (beyond, outside) = beyond_training_range_of(range, 4.0 - TAU, true);
+        assert!(outside && (beyond - 0.5).abs() < 1e-12, "{beyond}");
+        // A range a turn wide holds every angle.
+        assert!(!beyond_training_range_of([-4.0, 2.5], 40.0, true).1);
+        assert!(!outside_training_range(
+            &[range, range],
+            &[3.0, 3.0 + TAU],
+            &[false, true]
+        ));
+        assert!(outside_training_range(
+            &[range, range],
+            &[3.0 + TAU, 3.0],
+            &[false, true]
+        ));
     }
 }
