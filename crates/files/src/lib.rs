@@ -5,7 +5,8 @@
 //!   (`O_CREAT | O_EXCL | O_NOFOLLOW`: a link planted at that name is never followed),
 //!   fsynced and renamed over the destination; the destination is replaced only when it is
 //!   missing or a regular file, never followed when it is a symbolic link.
-//! * [`temp_dir_beside`]: the same for a folder that is filled and then renamed into place.
+//! * [`temp_dir_beside`]: the same for a folder that is filled and then renamed into place;
+//!   [`exchange`] swaps it with the folder it replaces in one step.
 //! * [`read_regular`] / [`read_regular_text`] / [`open_regular`]: only a regular file is
 //!   read (a FIFO, a device or a socket is refused from its metadata, and opened without
 //!   blocking in case it was swapped in since), and never more than a stated bound
@@ -15,9 +16,11 @@
 
 #![warn(missing_docs)]
 
+mod exchange;
 mod read;
 mod write;
 
+pub use exchange::exchange;
 pub use read::{open_regular, read_regular, read_regular_text, DATA_LIMIT, TEXT_LIMIT};
 pub use write::{release, remove_pending, temp_dir_beside, write_atomic, write_atomic_with};
 

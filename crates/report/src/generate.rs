@@ -118,10 +118,21 @@ fn write_figures(
         }
         let old = dir.join(format!(".{}.old-{}", files::FIGURES, std::process::id()));
         let _commit = admittance_runfolder::commit_guard();
+        // In one step where the system can (the old figures then hold the temporary name,
+        // removed with it); else aside and back on a failure.
+        if fig_dir.exists()
+            && admittance_files::exchange(&tmp_dir, &fig_dir).map_err(io(&fig_dir))?
+        {
+            let _ = std::fs::remove_dir_all(&tmp_dir);
+            return Ok(());
+        }
         if fig_dir.exists() {
             std::fs::rename(&fig_dir, &old).map_err(io(&fig_dir))?;
         }
-        std::fs::rename(&tmp_dir, &fig_dir).map_err(io(&fig_dir))?;
+        if let Err(e) = std::fs::rename(&tmp_dir, &fig_dir) {
+            let _ = std::fs::rename(&old, &fig_dir);
+            return Err(io(&fig_dir)(e));
+        }
         let _ = std::fs::remove_dir_all(&old);
         Ok(())
     };

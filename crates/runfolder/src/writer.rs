@@ -150,18 +150,36 @@ pub fn write_folder<E>(
     };
     let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
     let replaced = std::fs::symlink_metadata(out_dir).is_ok();
-    if replaced {
-        if let Err(e) = std::fs::rename(out_dir, &old) {
+    // Replacing, the two folders swap names in one step where the system can: renamed aside
+    // first, a run killed between the two renames left no folder at `out_dir` and its new
+    // one marked as partial, for a later run to remove.
+    let swapped = replaced
+        && match admittance_files::exchange(&partial, out_dir) {
+            Ok(swapped) => swapped,
+            Err(e) => {
+                unmark();
+                return Err(io(out_dir, e));
+            }
+        };
+    if swapped {
+        // The old folder is now at the partial name, unmarked: moved aside to be removed.
+        if std::fs::rename(&partial, &old).is_err() {
+            let _ = std::fs::remove_dir_all(&partial);
+        }
+    } else {
+        if replaced {
+            if let Err(e) = std::fs::rename(out_dir, &old) {
+                unmark();
+                return Err(io(out_dir, e));
+            }
+        }
+        if let Err(e) = std::fs::rename(&partial, out_dir) {
             unmark();
+            if replaced {
+                let _ = std::fs::rename(&old, out_dir);
+            }
             return Err(io(out_dir, e));
         }
-    }
-    if let Err(e) = std::fs::rename(&partial, out_dir) {
-        unmark();
-        if replaced {
-            let _ = std::fs::rename(&old, out_dir);
-        }
-        return Err(io(out_dir, e));
     }
     // The marker goes last, from the folder in place: a run killed between taking it out of
     // the partial folder and the rename left an unmarked partial folder that no later run

@@ -258,6 +258,19 @@ fn run_writes_every_output_and_report_regenerates_them() {
         .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    // Again, over the figures in place: swapped in whole, nothing left beside them.
+    let (code, _, err) = admittance(&["report", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read_dir(&figures).unwrap().count(), 2 * pngs.len());
+    let hidden = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .count();
+    assert_eq!(
+        hidden, 0,
+        "temporary folders left after replacing the figures"
+    );
 
     // Bad folders: exit 3, one line naming the file.
     let summary_path = out.join("summary.json");
