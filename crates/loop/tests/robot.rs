@@ -597,14 +597,19 @@ fn an_angle_outside_the_identifications_training_range_is_flagged() {
     assert!(flagged(&narrow, true) > 100);
 }
 
-#[test]
-fn a_continuous_joint_reported_wrapped_at_pi_runs_as_if_unwrapped() {
-    // Baxter's last wrist joint made continuous, turning through +-pi at 0.8 rad/s.
+/// The arm with its last wrist joint made continuous (no position limits).
+fn continuous_w2_model() -> Model {
     let text = std::fs::read_to_string(URDF).unwrap().replace(
         r#"<joint name="left_w2" type="revolute">"#,
         r#"<joint name="left_w2" type="continuous">"#,
     );
-    let model = Model::from_urdf_str(&text, URDF, Some("base"), Some("left_hand")).unwrap();
+    Model::from_urdf_str(&text, URDF, Some("base"), Some("left_hand")).unwrap()
+}
+
+#[test]
+fn a_continuous_joint_reported_wrapped_at_pi_runs_as_if_unwrapped() {
+    // Baxter's last wrist joint made continuous, turning through +-pi at 0.8 rad/s.
+    let model = continuous_w2_model();
     let mut data = Data::new(&model);
     let config = RobotConfig::from_toml_with(LOOP_TOML, Path::new("loop.toml"), &[]).unwrap();
     let wrap = |x: f64| x.sin().atan2(x.cos());
@@ -660,11 +665,7 @@ fn a_continuous_joint_turned_past_pi_stays_inside_a_training_range_a_turn_wide()
     // Baxter's last wrist joint made continuous, fitted over a turn of it ([-3.2, 3.2]), then
     // turned from 3 rad through +-pi, reported wrapped: the loop's branch runs on past pi,
     // where every angle is one the fit saw. A revolute joint's range holds no such turn.
-    let text = std::fs::read_to_string(URDF).unwrap().replace(
-        r#"<joint name="left_w2" type="revolute">"#,
-        r#"<joint name="left_w2" type="continuous">"#,
-    );
-    let model = Model::from_urdf_str(&text, URDF, Some("base"), Some("left_hand")).unwrap();
+    let model = continuous_w2_model();
     let tmp = tempfile::tempdir().unwrap();
     let mut ident = admittance_dynamics::Identification::from_model(model.clone());
     ident.summary.training_range = POSE.iter().map(|&p| [p - 1.0, p + 1.0]).collect();
