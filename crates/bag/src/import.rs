@@ -230,7 +230,15 @@ fn tabulate(
     }
     let n = ex.joints.len();
     let dt = period as f64 * 1e-9;
-    let q_v = resample::interpolate(q, &grid);
+    let (q, unwrapped) = resample::unwrapped(q);
+    if !unwrapped.is_empty() {
+        notes.push(format!(
+            "{} read within one turn (a continuous joint's angle, wrapped): put back on one \
+             branch before resampling",
+            unwrapped.join(", ")
+        ));
+    }
+    let q_v = resample::interpolate(&q, &grid);
     let (qdot_v, derivatives) = match qdot {
         Some(s) => (
             resample::interpolate(s, &grid),

@@ -86,6 +86,23 @@ pub fn period_ns(bag: &Path, q: &Series, rate_hz: Option<f64>) -> Result<i64, Ba
     }
 }
 
+/// The series with each column that reads as a wrapped angle (a continuous joint's, kept
+/// within one turn by its driver: `admittance_dynamics::unwrap_turns`) put back on its first
+/// sample's branch, and those columns' names (`q.J`): interpolated across a wrap, an angle
+/// would pass through every value between the two readings.
+pub fn unwrapped(s: &Series) -> (Series, Vec<String>) {
+    let mut out = s.clone();
+    let n = s.columns.len();
+    let mut names = Vec::new();
+    for (i, column) in s.columns.iter().enumerate() {
+        let seconds = |k: usize| s.stamps[k].saturating_sub(s.stamps[k - 1]) as f64 * 1e-9;
+        if admittance_dynamics::unwrap_turns(&mut out.values, n, i, seconds) {
+            names.push(format!("q.{column}"));
+        }
+    }
+    (out, names)
+}
+
 /// Samples a series at the grid stamps (inside its span) by linear interpolation; a grid
 /// stamp equal to a sample's stamp gives that sample exactly.
 pub fn interpolate(s: &Series, grid: &[i64]) -> Vec<f64> {

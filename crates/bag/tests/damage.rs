@@ -377,3 +377,40 @@ fn chunk_crcs_catch_flipped_bytes_in_compressed_data() {
         );
     }
 }
+
+#[test]
+fn a_joint_read_within_one_turn_is_unwrapped_before_resampling() {
+    // j0 turns at 2 rad/s from 3 rad, its driver reporting it in [-pi, pi); resampled at
+    // 400 Hz (between the 1 kHz samples), an angle interpolated across a wrap would pass
+    // through every value between.
+    let dir = tempfile::tempdir().unwrap();
+    let wrap = |a: f64| {
+        a - std::f64::consts::TAU * ((a + std::f64::consts::PI) / std::f64::consts::TAU).floor()
+    };
+    let bag = js_bag(dir.path(), 400, |k, js, _| {
+        js.position[0] = wrap(3.0 + 2.0 * k as f64 * 1e-3);
+    });
+    let options = ImportOptions {
+        rate_hz: Some(400.0),
+        ..options(false)
+    };
+    let im = import(&bag, &js_profile(true), &options).unwrap();
+    let (n, table) = (im.table.joints.len(), &im.table);
+    let rows = table.t.len();
+    assert!(rows > 100, "{rows}");
+    let mut largest_step: f64 = 0.0;
+    for k in 1..rows {
+        largest_step = largest_step.max((table.q[k * n] - table.q[(k - 1) * n]).abs());
+    }
+    // 2 rad/s over 2.5 ms: 5 mrad a row, never a turn nor a jump through the others.
+    assert!(largest_step < 0.01, "{largest_step}");
+    assert!(
+        table.q[(rows - 1) * n] > std::f64::consts::PI,
+        "past pi on one branch"
+    );
+    assert!(
+        im.report.to_string().contains("q.j0 read within one turn"),
+        "{}",
+        im.report
+    );
+}

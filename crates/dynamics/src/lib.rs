@@ -36,6 +36,7 @@ mod model;
 mod parallel;
 pub mod spatial;
 mod urdf;
+mod wrapped_angles;
 
 pub use algorithms::aba::{aba, aba_with_tip_wrench};
 pub use algorithms::coriolis::coriolis_matrix;
@@ -65,6 +66,7 @@ pub use model::{
 pub use parallel::parallel_map;
 pub use spatial::{Force, Inertia, Motion, Transform};
 pub use urdf::UrdfOptions;
+pub use wrapped_angles::{unwrap_turns, IMPLAUSIBLE_JOINT_SPEED};
 
 impl Model {
     /// Loads the chain between `base` (default: the root link) and `tip` (default: the

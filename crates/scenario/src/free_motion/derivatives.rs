@@ -105,7 +105,7 @@ fn steps_beyond<'a>(
 
 /// Speeds (rad/s or m/s) no arm joint reaches: a step of `q` faster than this between two
 /// rows is a glitch of the encoder or the logger.
-pub(super) const IMPLAUSIBLE_SPEED: f64 = 100.0;
+const IMPLAUSIBLE_SPEED: f64 = admittance_dynamics::IMPLAUSIBLE_JOINT_SPEED;
 
 impl FreeMotionData {
     /// Refuses a step of an angle by more than pi between two rows that the loader did not
