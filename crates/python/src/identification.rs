@@ -309,7 +309,7 @@ impl PyIdentification {
     }
 
     /// Per-joint terms: a list of dicts (armature, viscous, coulomb, coulomb_width,
-    /// offset, spring).
+    /// offset, spring, spring_range).
     #[getter]
     fn joint_terms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         json_to_py(

@@ -62,6 +62,9 @@ def test_identify_predicts_other_motion(baxter, truth_and_data):
     s = ident.summary
     assert "blocked cross-validation" in s["held_out"] and len(s["expected_false_torque_rms"]) == baxter.n
     assert len(ident.joint_terms) == baxter.n and "viscous" in ident.joint_terms[0]
+    # A joint's springs, where kept, carry the range they were fitted over (linear beyond it).
+    for terms, kept, fitted in zip(ident.joint_terms, s["springs"], s["training_range"]):
+        assert terms["spring_range"] == (fitted if kept else None), (terms, kept, fitted)
 
 
 def test_the_chosen_cut_off_is_the_best_candidate_fitted_alone(baxter, truth_and_data):

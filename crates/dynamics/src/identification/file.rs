@@ -15,10 +15,15 @@ use crate::model::Model;
 
 /// The `format` tag of identification files.
 pub const IDENTIFICATION_FORMAT: &str = "admittance-identification";
-/// The `format_version` this build writes. It reads 1 too: version 2 added `gravity`,
-/// `lock` and `drop` (a version 1 file was made with gravity `(0, 0, -9.81)` in the base's
-/// axes and no lock or drop recorded).
-pub const IDENTIFICATION_FORMAT_VERSION: u64 = 2;
+/// The newest `format_version` this build writes and reads. Version 3 added the joint
+/// terms' `spring_range` (springs linear beyond it), written only by files that hold one
+/// (others stay version 2, which older builds read: without the range they would evaluate
+/// such springs differently, so they refuse version 3). Version 2 added `gravity`, `lock`
+/// and `drop` (a version 1 file was made with gravity `(0, 0, -9.81)` in the base's axes
+/// and no lock or drop recorded).
+pub const IDENTIFICATION_FORMAT_VERSION: u64 = 3;
+/// The version of a file whose joint terms hold no spring range.
+const VERSION_WITHOUT_SPRING_RANGES: u64 = 2;
 /// Gravity of a file that does not state it (version 1).
 const VERSION_1_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 
@@ -119,7 +124,11 @@ impl Identification {
             serde_json::to_value(self.to_file(urdf_model, data)).map_err(|e| err(path, e))?;
         let envelope = serde_json::json!({
             "format": IDENTIFICATION_FORMAT,
-            "format_version": IDENTIFICATION_FORMAT_VERSION,
+            "format_version": if self.joint_terms.iter().any(|t| t.spring_range.is_some()) {
+                IDENTIFICATION_FORMAT_VERSION
+            } else {
+                VERSION_WITHOUT_SPRING_RANGES
+            },
             "checksum": checksum(&payload),
             "payload": payload,
         });

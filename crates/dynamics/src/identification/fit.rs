@@ -217,7 +217,9 @@ pub fn identify(
         })
         .map(|(b, _)| b)
         .collect();
-    let identified = Identification::from_solution(model, &x, width)?;
+    let range = training_range(train);
+    let mut identified = Identification::from_solution(model, &x, width)?;
+    identified.continue_springs_beyond(&range);
     let refit = |normal: &Normal| {
         let (xb, _) = fit(normal)?;
         Identification::from_solution(model, &xb, width)
@@ -263,7 +265,7 @@ pub fn identify(
         step_response_s: 0.0,
         acceleration_gain,
         prior_scale,
-        training_range: training_range(train),
+        training_range: range,
     };
     Ok(Identification {
         summary,

@@ -14,6 +14,7 @@ use crate::identification::normal::{
 };
 use crate::identification::samples::Samples;
 use crate::identification::settings::IdentificationSettings;
+use crate::identification::training_range::{spring_ranges, training_range};
 use crate::identification::Identification;
 use crate::model::Model;
 use crate::parallel::parallel_map;
@@ -183,24 +184,34 @@ pub(super) fn held_sums<'a>(
     shifts: &[f64],
     widths: &[f64],
 ) -> Result<HeldSums<'a>, DynamicsError> {
-    let stretches = |s: &Samples, blocks: usize| -> Result<Vec<JointSums>, DynamicsError> {
+    let stretches = |s: &Samples,
+                     blocks: usize,
+                     springs: &[Option<[f64; 2]>]|
+     -> Result<Vec<JointSums>, DynamicsError> {
         let ranges: Vec<(usize, usize)> = (0..blocks)
             .map(|b| (b * s.len() / blocks, (b + 1) * s.len() / blocks))
             .collect();
-        parallel_map(&ranges, |&r| accumulate(model, s, widths, r, shifts))
-            .into_iter()
-            .collect()
+        parallel_map(&ranges, |&r| {
+            accumulate(model, s, widths, r, shifts, springs)
+        })
+        .into_iter()
+        .collect()
     };
     let blocks = match validation {
         Some(_) => 1,
         None => settings.folds,
     };
+    // A validation recording is scored as the fitted springs will be used: beyond the
+    // training motion's range they continue linearly.
     let validation = match validation {
-        Some(v) => Some((stretches(v, 1)?.remove(0), *v)),
+        Some(v) => {
+            let springs = spring_ranges(model, &training_range(train));
+            Some((stretches(v, 1, &springs)?.remove(0), *v))
+        }
         None => None,
     };
     Ok(HeldSums {
-        train: stretches(train, blocks)?,
+        train: stretches(train, blocks, &[])?,
         validation,
         friction: settings.friction,
     })
@@ -260,6 +271,18 @@ pub(super) fn best_of<T>(candidates: impl Iterator<Item = (T, f64)>, none: T) ->
     )
 }
 
+/// Per joint, the range spanned by every stretch's range but the `skip`-th.
+fn range_of_others(ranges: &[Vec<[f64; 2]>], skip: usize) -> Vec<[f64; 2]> {
+    let n = ranges.first().map_or(0, Vec::len);
+    let mut out = vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
+    for (_, r) in ranges.iter().enumerate().filter(|&(b, _)| b != skip) {
+        for (o, x) in out.iter_mut().zip(r) {
+            *o = [o[0].min(x[0]), o[1].max(x[1])];
+        }
+    }
+    out
+}
+
 /// The torques of `s` paired with the motion as the chosen shifts pair them.
 pub(super) fn shifted_torques(s: &Samples, shifts: &[f64], signals: &Signals) -> Vec<f64> {
     let n = signals.len();
@@ -308,14 +331,27 @@ pub(super) fn errors_by_gain(
             };
             let total = total.at(signals);
             let folds: Vec<usize> = (0..blocks.len()).collect();
+            let stretch = |b: usize| {
+                (
+                    b * train.len() / blocks.len(),
+                    (b + 1) * train.len() / blocks.len(),
+                )
+            };
+            let ranges: Vec<Vec<[f64; 2]>> = folds
+                .iter()
+                .map(|&b| {
+                    let (s, e) = stretch(b);
+                    training_range(&train.slice(s, e))
+                })
+                .collect();
             let errors = parallel_map(&folds, |&b| {
                 let mut rest = total.clone();
                 rest.sub(&blocks[b].at(signals));
-                let id = refit(&rest)?;
-                let (s, e) = (
-                    b * train.len() / blocks.len(),
-                    (b + 1) * train.len() / blocks.len(),
-                );
+                let mut id = refit(&rest)?;
+                // The fold's springs continue beyond the range of the stretches it was
+                // fitted on, as the final fit's do beyond the recording's.
+                id.continue_springs_beyond(&range_of_others(&ranges, b));
+                let (s, e) = stretch(b);
                 id.squared_errors_by_gain(&train.slice(s, e), gains)
                     .map(|errors| (errors, e - s))
             });

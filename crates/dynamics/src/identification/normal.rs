@@ -316,13 +316,15 @@ pub(crate) fn shifted_torque(samples: &Samples, k: usize, i: usize, shift: f64) 
 /// (in samples: positive pairs each motion sample with a later torque sample, read across
 /// the stretch's ends) and the Coulomb features at every candidate width of `widths`
 /// (rad/s). One regressor per sample; each joint's rows multiplied only over the columns
-/// they can touch.
+/// they can touch. `spring_ranges` (per joint, or empty) are where the training motion was:
+/// beyond them the spring features continue linearly, as the fitted springs do.
 pub(crate) fn accumulate(
     model: &Model,
     samples: &Samples,
     widths: &[f64],
     (start, end): (usize, usize),
     shifts: &[f64],
+    spring_ranges: &[Option<[f64; 2]>],
 ) -> Result<JointSums, DynamicsError> {
     let n = model.nq();
     let s_count = shifts.len();
@@ -348,7 +350,8 @@ pub(crate) fn accumulate(
             let (q, qd, qdd, _) = samples.row(k + s);
             let y = joint_torque_regressor(model, &mut data, q, qd, qdd)?;
             for i in 0..n {
-                features(q[i], qd[i], qdd[i], widths[0], &mut f);
+                let range = spring_ranges.get(i).copied().flatten();
+                features(q[i], qd[i], qdd[i], widths[0], range, &mut f);
                 let mut column = rows[i].column_mut(s);
                 for (r, &c) in cols[i].iter().enumerate() {
                     column[r] = if c < inertial {

@@ -73,7 +73,7 @@ pub(super) fn prior_scale(
         );
         let (bias, total) = (&urdf.bias[r.clone()], &urdf.total[r]);
         for i in 0..n {
-            features(q[i], qd[i], qdd[i], width, &mut f);
+            features(q[i], qd[i], qdd[i], width, None, &mut f);
             row[0] = bias[i];
             row[1] = total[i] - bias[i];
             row[2..].copy_from_slice(&f);

@@ -6,7 +6,7 @@
 use std::f64::consts::TAU;
 
 use crate::identification::{Identification, Samples};
-use crate::model::JointKind;
+use crate::model::{JointKind, Model};
 
 /// How far beyond its training range a position may lie before it counts as outside, as a
 /// share of the range's span: positions that close to the fitted ones are checked by
@@ -77,7 +77,33 @@ pub(crate) fn training_range(samples: &Samples) -> Vec<[f64; 2]> {
     range
 }
 
+/// Per joint, the range its springs are fitted over: `range`'s, none for a continuous joint
+/// (its springs repeat every turn, [`crate::identification::JointTerms::spring_range`]).
+pub(crate) fn spring_ranges(model: &Model, range: &[[f64; 2]]) -> Vec<Option<[f64; 2]>> {
+    model
+        .joints
+        .iter()
+        .zip(range)
+        .map(|(j, &[low, high])| {
+            let usable = j.kind != JointKind::Continuous
+                && low.is_finite()
+                && high.is_finite()
+                && low <= high;
+            usable.then_some([low, high])
+        })
+        .collect()
+}
+
 impl Identification {
+    /// Makes each joint's springs, where it has any, continue linearly beyond `range` (per
+    /// joint, where they were fitted; [`spring_ranges`]).
+    pub(crate) fn continue_springs_beyond(&mut self, range: &[[f64; 2]]) {
+        let ranges = spring_ranges(&self.model, range);
+        for (terms, r) in self.joint_terms.iter_mut().zip(ranges) {
+            terms.spring_range = r.filter(|_| terms.spring.iter().any(|&k| k != 0.0));
+        }
+    }
+
     /// Per joint, how the positions `q` (row-major, one row of `n` per sample) leave the
     /// summary's `training_range` by more than [`TRAINING_RANGE_MARGIN`] of its span (a
     /// continuous joint on its nearest turn: [`beyond_training_range_of`]); empty when the

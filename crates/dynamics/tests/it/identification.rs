@@ -8,7 +8,7 @@ use admittance_dynamics::*;
 
 /// A multi-sine motion (each joint its own frequencies, from `seed`) inside +-0.8 rad of
 /// the middle of the joint's range, sampled at 200 Hz for `seconds`.
-fn motion(model: &Model, seed: f64, seconds: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+pub(crate) fn motion(model: &Model, seed: f64, seconds: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let n = model.nq();
     let steps = (seconds * 200.0) as usize;
     let (mut q, mut qd, mut qdd) = (vec![], vec![], vec![]);
@@ -54,11 +54,18 @@ fn truth_terms(n: usize) -> Vec<JointTerms> {
             } else {
                 [0.0; 4]
             },
+            spring_range: None,
         })
         .collect()
 }
 
-fn torques(model: &Model, terms: &[JointTerms], q: &[f64], qd: &[f64], qdd: &[f64]) -> Vec<f64> {
+pub(crate) fn torques(
+    model: &Model,
+    terms: &[JointTerms],
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> Vec<f64> {
     let n = model.nq();
     let mut data = Data::new(model);
     let mut out = Vec::with_capacity(q.len());

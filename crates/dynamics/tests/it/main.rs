@@ -16,3 +16,4 @@ mod physical_files;
 mod properties;
 mod real_descriptions;
 mod regressor;
+mod spring_tails;

@@ -162,3 +162,38 @@ fn what_consumers_take_from_the_summary_is_checked() {
         "{e}"
     );
 }
+
+#[test]
+fn a_spring_range_round_trips_as_version_3_and_a_reversed_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = common::baxter();
+    let path = dir.path().join("sprung.ident.json");
+    let mut ident = Identification::from_model(urdf.clone());
+    ident.joint_terms[1].spring = [20.0, -4.0, 0.0, 0.0];
+    ident.joint_terms[1].spring_range = Some([-0.7, 1.1]);
+    ident.save(&path, &urdf, BTreeMap::new()).unwrap();
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    // Builds that predate the range would evaluate these springs otherwise: version 3.
+    assert_eq!(v["format_version"], 3);
+    let back = Identification::load(&path, &urdf).unwrap();
+    assert_eq!(back.joint_terms[1].spring_range, Some([-0.7, 1.1]));
+    assert_eq!(
+        back.joint_terms[1].spring_torque(2.0),
+        ident.joint_terms[1].spring_torque(2.0)
+    );
+    // Without a range the file stays version 2, which older builds read.
+    let plain = dir.path().join("plain.ident.json");
+    Identification::from_model(urdf.clone())
+        .save(&plain, &urdf, BTreeMap::new())
+        .unwrap();
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&plain).unwrap()).unwrap();
+    assert_eq!(v["format_version"], 2);
+    let e = load_edited(dir.path(), |p| {
+        p["joint_terms"][2]["spring_range"] = serde_json::json!([1.0, -1.0])
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("joint_terms[2]") && e.contains("spring range"),
+        "{e}"
+    );
+}

@@ -648,7 +648,8 @@ class Identification:
         """The identified rigid-body model (the URDF's kinematics)."""
     @property
     def joint_terms(self) -> List[dict]:
-        """Per joint: armature, viscous, coulomb (two levels), coulomb_width, offset, spring."""
+        """Per joint: armature, viscous, coulomb (two levels), coulomb_width, offset, spring,
+        spring_range (the positions the springs were fitted over, linear beyond; or None)."""
     @property
     def summary(self) -> dict:
         """Chosen settings and the expected false torque per joint (N m rms) on motion it was
