@@ -62,9 +62,39 @@ def test_identify_predicts_other_motion(baxter, truth_and_data):
     s = ident.summary
     assert "blocked cross-validation" in s["held_out"] and len(s["expected_false_torque_rms"]) == baxter.n
     assert len(ident.joint_terms) == baxter.n and "viscous" in ident.joint_terms[0]
-    # A joint's springs, where kept, carry the range they were fitted over (linear beyond it).
+    # A joint's springs, where kept over less than half a turn, carry the range they were
+    # fitted over (linear beyond it).
     for terms, kept, fitted in zip(ident.joint_terms, s["springs"], s["training_range"]):
-        assert terms["spring_range"] == (fitted if kept else None), (terms, kept, fitted)
+        expected = fitted if kept and fitted[1] - fitted[0] < np.pi else None
+        assert terms["spring_range"] == expected, (terms, kept, fitted)
+
+
+def test_a_spring_fitted_over_less_than_half_a_turn_continues_along_its_tangent(baxter, truth_and_data):
+    """A torsion spring on the shoulder (linear in its angle): the identification keeps a
+    spring there with the range it was fitted over, and beyond that range predicts along the
+    spring's tangent, nearer the truth than the series (docs/method.md eq. 33)."""
+    friction, data = truth_and_data
+    spring = lambda q: 20.0 * q[:, 1]  # noqa: E731
+    sprung = dict(data, tau=data["tau"].copy())
+    sprung["tau"][:, 1] += spring(data["q"])
+    ident = adm.identify(sprung, baxter, input_filter_hz=0)
+    s = ident.summary
+    fitted = s["training_range"][1]
+    assert s["springs"][1] and fitted[1] - fitted[0] < np.pi, (s["springs"], fitted)
+    assert ident.joint_terms[1]["spring_range"] == fitted
+    # Other motion with the shoulder 0.5 rad above its range.
+    _, q, qd, qdd = multisine(baxter, 7, 10.0)
+    q[:, 1] += fitted[1] + 0.5 - q[:, 1].max()
+    truth = torques(baxter, q, qd, qdd, friction)
+    truth[:, 1] += spring(q)
+    beyond = q[:, 1] > fitted[1] + 0.25
+    err = np.sqrt(np.mean((ident.predict(q, qd, qdd)[beyond, 1] - truth[beyond, 1]) ** 2))
+    k = ident.joint_terms[1]["spring"]
+    series = lambda x: k[0] * np.sin(x) + k[1] * np.cos(x) + k[2] * np.sin(2 * x) + k[3] * np.cos(2 * x)  # noqa: E731
+    top = fitted[1]
+    tangent = series(np.array([top]))[0] + (series(np.array([top + 1e-6]))[0] - series(np.array([top - 1e-6]))[0]) / 2e-6 * (q[beyond, 1] - top)
+    bent = ident.predict(q, qd, qdd)[beyond, 1] - tangent + series(q[beyond, 1])
+    assert err < 0.5 * np.sqrt(np.mean((bent - truth[beyond, 1]) ** 2)), err
 
 
 def test_the_chosen_cut_off_is_the_best_candidate_fitted_alone(baxter, truth_and_data):

@@ -11,10 +11,10 @@
 //! the friction curve bend near rest as Stribeck friction does (Gaz et al. 2019 fit a
 //! sigmoid for the same reason). The spring terms, a Fourier series of order 2 in the
 //! joint's own angle, stand for what a URDF does not describe (Baxter's gravity-assist
-//! spring on s1, cable and hose forces). Fitted over the recording's range of the joint,
-//! they continue along their tangent beyond it (`spring_range`), as a natural spline does
-//! beyond its last knot: the series' own continuation bends back within a fraction of a
-//! turn and says nothing the recording measured.
+//! spring on s1, cable and hose forces). Fitted over less than half a turn of the joint,
+//! they continue along their tangent beyond that range (`spring_range`), as a natural
+//! spline does beyond its last knot: there the series' own continuation bends back within a
+//! fraction of a turn and says nothing the recording measured.
 
 use serde::{Deserialize, Serialize};
 
@@ -47,8 +47,9 @@ pub struct JointTerms {
     pub spring: [f64; 4],
     /// The positions `[lowest, highest]` the springs were fitted over (rad or m): beyond
     /// them the spring torque continues linearly with the slope it has at the nearer end.
-    /// `None`: the series everywhere (files written before it was recorded, joints without
-    /// springs, continuous joints, whose springs repeat every turn).
+    /// `None`: the series everywhere (joints without springs, springs fitted over half a
+    /// turn or more, continuous joints, whose springs repeat every turn, and files written
+    /// before it was recorded).
     #[serde(default)]
     pub spring_range: Option<[f64; 2]>,
 }

@@ -1,7 +1,7 @@
-//! Springs fitted over the training motion's range continue along their tangent beyond it
-//! (`JointTerms::spring_range`): an arm with a torsion spring (linear in the angle, which
-//! the Fourier series only approximates) scored where its shoulder goes beyond the range
-//! it was identified on.
+//! Springs fitted over less than half a turn continue along their tangent beyond the
+//! training motion's range (`JointTerms::spring_range`): an arm with a torsion spring
+//! (linear in the angle, which the Fourier series only approximates) scored where its
+//! shoulder goes beyond the range it was identified on.
 
 use crate::identification::{motion, torques};
 use admittance_dynamics::*;
