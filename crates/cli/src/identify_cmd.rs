@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use admittance_dynamics::{Identification, IdentificationSettings, Model, Samples};
+use admittance_dynamics::{Identification, IdentificationSettings, JointTerms, Model, Samples};
 use admittance_scenario::FreeMotionData;
 use clap::Args;
 use serde_json::json;
@@ -296,6 +296,15 @@ pub fn identify_cmd(args: &IdentifyArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The springs column: how a kept spring continues beyond the positions trained on.
+fn spring_kind(kept: bool, terms: &JointTerms) -> &'static str {
+    match (kept, terms.spring_range) {
+        (false, _) => "-",
+        (true, Some(_)) => "linear",
+        (true, None) => "periodic",
+    }
+}
+
 fn filter_name(hz: f64) -> String {
     if hz > 0.0 {
         format!("{hz} Hz")
@@ -367,7 +376,7 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
             "  {name:<16} {:>10.3} {:>12.3} {:>8}  {range}\n",
             s.prior_false_torque_rms.get(i).copied().unwrap_or(f64::NAN),
             s.expected_false_torque_rms[i],
-            if s.springs[i] { "yes" } else { "-" }
+            spring_kind(s.springs[i], &ident.joint_terms[i])
         );
     }
     text += &format!(
@@ -377,8 +386,9 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         total(&s.expected_false_torque_rms),
     );
     if !s.training_range.is_empty() {
-        text += "beyond the positions trained on the model extrapolates (its springs, offsets and \
-                 gravity): `admittance evaluate` lists data that go there, the run-time loop flags \
+        text += "beyond the positions trained on the model extrapolates (its offsets, gravity and \
+                 springs: `linear` along their tangent, `periodic` as fitted over half a turn or \
+                 more): `admittance evaluate` lists data that go there, the run-time loop flags \
                  each such step (outside_training_range)\n";
     }
     text += &format!("wrote {}\n", out.display());

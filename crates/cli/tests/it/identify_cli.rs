@@ -6,18 +6,18 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-fn admittance(args: &[&str]) -> Output {
+pub(crate) fn admittance(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_admittance"))
         .args(args)
         .output()
         .expect("the binary runs")
 }
 
-fn text(o: &Output) -> String {
+pub(crate) fn text(o: &Output) -> String {
     format!(
         "{}{}",
         String::from_utf8_lossy(&o.stdout),
@@ -26,7 +26,7 @@ fn text(o: &Output) -> String {
 }
 
 /// The row of `evaluate`'s table named `name`: (rms, nMSE).
-fn row(table: &str, name: &str) -> (f64, f64) {
+pub(crate) fn row(table: &str, name: &str) -> (f64, f64) {
     let line = table
         .lines()
         .find(|l| l.starts_with(name))
@@ -135,7 +135,7 @@ fn identify_then_evaluate_on_other_motion() {
 }
 
 /// The real Baxter recording (`ADMITTANCE_DATA`), or `None` (the test is skipped).
-fn baxter_recording() -> Option<PathBuf> {
+pub(crate) fn baxter_recording() -> Option<PathBuf> {
     let Some(dir) = std::env::var_os("ADMITTANCE_DATA") else {
         eprintln!("skipped: ADMITTANCE_DATA is not set (the folder holding baxter_rand/)");
         return None;
@@ -151,7 +151,7 @@ fn baxter_recording() -> Option<PathBuf> {
 
 /// `admittance identify` on the real Baxter's rows before `until` s at 4 Hz, to `out`, with
 /// `extra` arguments; succeeds, and returns what it printed and the file.
-fn identify_baxter(
+pub(crate) fn identify_baxter(
     data: &Path,
     until: &str,
     extra: &[&str],

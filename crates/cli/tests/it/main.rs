@@ -13,6 +13,7 @@ mod identify_cli;
 mod import_cli;
 mod payload_cli;
 mod planted_files;
+mod real_spring_tangent;
 mod reliability;
 mod report_cli;
 mod ros2_cli;
