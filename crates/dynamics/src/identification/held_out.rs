@@ -202,7 +202,7 @@ pub(super) fn held_sums<'a>(
         None => settings.folds,
     };
     // A validation recording is scored as the fitted springs will be used: beyond the
-    // training motion's range they continue linearly.
+    // training motion's range, where that is less than half a turn, they continue linearly.
     let validation = match validation {
         Some(v) => {
             let springs = spring_ranges(model, &training_range(train));

@@ -127,12 +127,15 @@ impl JointTerms {
 
     /// The first physical condition these terms break, as a phrase for an error message.
     pub fn physical_problem(&self) -> Option<String> {
+        if let Some([low, high]) = self.spring_range {
+            if !(low.is_finite() && high.is_finite() && low <= high) {
+                return Some(format!(
+                    "spring range [{low}, {high}] is not [lowest, highest] (finite, lowest first)"
+                ));
+            }
+        }
         if !self.is_valid() {
-            return Some(
-                "a coefficient is not finite, the Coulomb width is not positive or the spring \
-                 range is not [lowest, highest]"
-                    .into(),
-            );
+            return Some("a coefficient is not finite or the Coulomb width is not positive".into());
         }
         if self.armature < 0.0 {
             return Some(format!(
