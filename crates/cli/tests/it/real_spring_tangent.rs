@@ -4,18 +4,15 @@
 //! the Fourier series' own continuation (docs/experiments.md, "Springs continue along their
 //! tangent").
 
+use admittance_learning::broad::fnv1a64;
 use serde_json::Value;
 
 use crate::identify_cli::{admittance, baxter_recording, identify_baxter, root, row, text};
 
-/// FNV-1a 64 of the payload's JSON text (docs/outputs.md, "Identification files").
+/// The file's checksum: FNV-1a 64 of the payload's JSON text (docs/outputs.md,
+/// "Identification files").
 fn checksum(payload: &Value) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in payload.to_string().bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    format!("{h:016x}")
+    format!("{:016x}", fnv1a64(payload.to_string().as_bytes()))
 }
 
 #[test]

@@ -127,12 +127,10 @@ impl JointTerms {
 
     /// The first physical condition these terms break, as a phrase for an error message.
     pub fn physical_problem(&self) -> Option<String> {
-        if let Some([low, high]) = self.spring_range {
-            if !(low.is_finite() && high.is_finite() && low <= high) {
-                return Some(format!(
-                    "spring range [{low}, {high}] is not [lowest, highest] (finite, lowest first)"
-                ));
-            }
+        if let (Some([low, high]), false) = (self.spring_range, self.spring_range_is_ordered()) {
+            return Some(format!(
+                "spring range [{low}, {high}] is not [lowest, highest] (finite, lowest first)"
+            ));
         }
         if !self.is_valid() {
             return Some("a coefficient is not finite or the Coulomb width is not positive".into());
@@ -166,9 +164,13 @@ impl JointTerms {
         self.coefficients().iter().all(|v| v.is_finite())
             && self.coulomb_width.is_finite()
             && self.coulomb_width > 0.0
-            && self
-                .spring_range
-                .is_none_or(|[l, h]| l.is_finite() && h.is_finite() && l <= h)
+            && self.spring_range_is_ordered()
+    }
+
+    /// No spring range, or one that is finite, lowest first.
+    fn spring_range_is_ordered(&self) -> bool {
+        self.spring_range
+            .is_none_or(|[l, h]| l.is_finite() && h.is_finite() && l <= h)
     }
 }
 
