@@ -20,7 +20,10 @@ package). Per recording and input cut-off (raw signals, 4 Hz, 10 Hz):
    project / least squares (the bar: <= 1.0), and whether every fitted joint term of the
    project is physical (armature, viscous >= 0; a friction that opposes the velocity at every speed:
    coulomb[0] + coulomb[1] >= 0 and 10 coulomb[0] + coulomb[1] >= 0);
-   then the geometric mean of the ratios (the bar: <= 0.9).
+   then the geometric mean of the ratios (the bar: <= 0.9). With `--speed-flags`, also the share
+   of scored rows where a joint moves faster than the identification's training speeds by more
+   than `adm.TRAINING_SPEED_MARGIN` (what the run-time loop flags as faster_than_training) and
+   both fits' rms on those joints' samples and on the rest.
 
 Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.csv: the first
 120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
@@ -57,6 +60,8 @@ import admittance as adm
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CUTOFFS_HZ = (0.0, 4.0, 10.0)
+#: --speed-flags: also split each point's scored samples at the identification's training speeds.
+SPEED_FLAGS = False
 COULOMB_WIDTH = 0.01  # rad/s, the plain fit's fixed width (identify chooses among COULOMB_WIDTH_CANDIDATES)
 RIDGE_REL = 1e-3
 JOINT_COLUMNS = 8  # q'', q', tanh(q'/w), tanh(q'/10w), 1, q, sin q, cos q
@@ -224,6 +229,7 @@ def compare(label, m, pmodel, train, scored, log):
         ls = LeastSquares(pmodel).fit(ct["q"], ct["qdot"], ct["qddot"], ct["tau"])
         baseline = rms(tau - ls.predict(q, qd, qdd))
         summary = ident.summary
+        faster = speed_flags(ident, qd, tau_id - np.asarray(ident.predict(q, qd, qdd)), tau - ls.predict(q, qd, qdd)) if SPEED_FLAGS else None
         point = {
             "recording": label,
             "input_filter_hz": hz,
@@ -237,12 +243,43 @@ def compare(label, m, pmodel, train, scored, log):
             "delay_s": summary.get("delay_s"),
             "prior_scale": summary.get("prior_scale"),
         }
-        points.append(point)
+        if faster is not None:
+            point["faster_than_training"] = faster
         log(
             f"{label:<28} {'raw' if hz == 0 else f'{hz:g} Hz':>6} {project:8.3f} {baseline:8.3f} {point['ratio']:7.3f}"
             f"  {'yes' if point['project_physical'] else 'NO':>8}  ({'yes' if point['least_squares_physical'] else 'no'})"
         )
+        points.append(point)
+        if faster is not None:
+            log("    " + speed_flag_text(faster))
     return points
+
+
+def speed_flags(ident, qdot, error, baseline_error):
+    """The scored samples (joint by joint) faster than the identification's training speeds
+    by more than ``adm.TRAINING_SPEED_MARGIN`` (what the loop flags as faster_than_training)
+    and the rest: their counts and summed squared errors of both fits, and the share of rows
+    with a joint flagged."""
+    top = np.asarray(ident.summary["training_speed"])
+    faster = np.abs(qdot) > (1.0 + adm.TRAINING_SPEED_MARGIN) * top
+    within = ~faster
+    return {
+        "rows": float(faster.any(axis=1).mean()),
+        "samples": int(faster.sum()),
+        "sq_identify": float((error[faster] ** 2).sum()),
+        "sq_least_squares": float((baseline_error[faster] ** 2).sum()),
+        "within_samples": int(within.sum()),
+        "within_sq_identify": float((error[within] ** 2).sum()),
+        "within_sq_least_squares": float((baseline_error[within] ** 2).sum()),
+    }
+
+
+def speed_flag_text(f):
+    """One line: the share of rows flagged, and both fits' rms on the flagged and other samples."""
+    r = lambda sq, k: f"{math.sqrt(sq / k):.3f}" if k else "-"
+    return (f"faster than trained: {100 * f['rows']:.1f} % of the rows; rms identify / LS on those joints' samples "
+            f"{r(f['sq_identify'], f['samples'])} / {r(f['sq_least_squares'], f['samples'])}, "
+            f"on the rest {r(f['within_sq_identify'], f['within_samples'])} / {r(f['within_sq_least_squares'], f['within_samples'])}")
 
 
 def scale_torque(data, factor):
@@ -481,6 +518,12 @@ def main():
     )
     parser.add_argument("--json", help="write every point to this file")
     parser.add_argument(
+        "--speed-flags",
+        action="store_true",
+        help="also print, per point, the scored rows faster than the identification's training speeds (what the loop "
+        "flags as faster_than_training) and both fits' rms there and elsewhere",
+    )
+    parser.add_argument(
         "--drop-rows",
         type=float,
         default=0.0,
@@ -543,6 +586,8 @@ def main():
     def log(text):
         print(text, flush=True)
 
+    global SPEED_FLAGS
+    SPEED_FLAGS = args.speed_flags
     if args.timing:
         if args.write_csv:
             taken = [a for a in args.arms if (pathlib.Path(args.write_csv) / f"{a}.csv").exists()]
@@ -582,6 +627,11 @@ def main():
     log(f"points with ratio > 1.0: {len(worse)}" + "".join(
         f"\n  {p['recording']} at {'raw' if p['input_filter_hz'] == 0 else str(p['input_filter_hz']) + ' Hz'}: {p['ratio']:.3f}" for p in worse))
     log(f"points whose fitted joint terms are not physical: {len(unphysical)}")
+    flagged = [p["faster_than_training"] for p in points if "faster_than_training" in p]
+    if flagged:
+        pooled = {k: sum(f[k] for f in flagged) for k in flagged[0] if k != "rows"}
+        pooled["rows"] = sum(f["rows"] for f in flagged) / len(flagged)
+        log("over every point, " + speed_flag_text(pooled) + " (rows: the mean share)")
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps({"points": points, "geometric_mean": geo}, indent=1))
 

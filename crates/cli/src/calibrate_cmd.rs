@@ -118,6 +118,13 @@ pub fn calibrate_contact(args: &CalibrateContactArgs) -> Result<(), CliError> {
                 path.display()
             );
         }
+        for line in crate::training_speed::lines(&ident, &arm, &conditioned.qdot) {
+            eprintln!(
+                "admittance: warning: {}: faster than the identification's training speeds, where its \
+                 friction extrapolates and the floor takes its error: {line}",
+                path.display()
+            );
+        }
         recordings.push(data);
     }
     let observer = MomentumObserverConfig {

@@ -431,13 +431,14 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         if fitted > urdf {
             text += &format!(
                 "the identification predicts these rows worse than the URDF alone ({fitted:.3} against \
-                 {urdf:.3} N m): where they leave its training range (below) it extrapolates; \
+                 {urdf:.3} N m): where they leave its training range or speeds (below) it extrapolates; \
                  elsewhere check the recording's signs and units against the one identified\n"
             );
         }
     }
     if let Some(id) = &ident {
         text += &crate::training_range::report(id, &arm, &rows.q[first * n..]);
+        text += &crate::training_speed::report(id, &arm, &rows.qdot[first * n..]);
     }
     if let Some(floor) = &args.contact_floor {
         let (id, from) = (ident.as_ref(), args.from);

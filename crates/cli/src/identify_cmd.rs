@@ -330,12 +330,12 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
     let mut text = format!(
         "identified {} joints from {} samples in {seconds:.1} s; held out: {}\n\
          ridge {:.1e}, Coulomb width {} rad/s{}, {} base parameters, condition number {:.1}, bodies a free fit would make impossible: {:?}\n\
-         expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8}  {}\n",
+         expected false torque on motion not trained on (rms, N m):\n  {:<16} {:>10} {:>12} {:>8} {:>12}  {}\n",
         arm.nq(), s.training_samples, s.held_out, s.ridge,
         ident.joint_terms.first().map_or(f64::NAN, |t| t.coulomb_width),
         if s.settings.coulomb_width.is_none() { " (chosen)" } else { "" },
         s.base_parameters, s.condition_number,
-        s.projected_bodies, "joint", "URDF", "identified", "springs", "positions trained on"
+        s.projected_bodies, "joint", "URDF", "identified", "springs", "top speed", "positions trained on"
     );
     if !s.bodies_at_extent.is_empty() {
         let names: Vec<&str> = s
@@ -372,8 +372,12 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
             .map_or("-".to_string(), |[low, high]| {
                 format!("{low:.2} to {high:.2}")
             });
+        let speed = s
+            .training_speed
+            .get(i)
+            .map_or("-".to_string(), |v| format!("{v:.2}"));
         text += &format!(
-            "  {name:<16} {:>10.3} {:>12.3} {:>8}  {range}\n",
+            "  {name:<16} {:>10.3} {:>12.3} {:>8} {speed:>12}  {range}\n",
             s.prior_false_torque_rms.get(i).copied().unwrap_or(f64::NAN),
             s.expected_false_torque_rms[i],
             spring_kind(s.springs[i], &ident.joint_terms[i])
@@ -390,6 +394,11 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
                  springs: `linear` along their tangent, `periodic` as fitted over half a turn or \
                  more): `admittance evaluate` lists data that go there, the run-time loop flags \
                  each such step (outside_training_range)\n";
+    }
+    if !s.training_speed.is_empty() {
+        text += "beyond the top speed trained at (rad/s or m/s, conditioned) its friction \
+                 extrapolates: `admittance evaluate` lists data over half again as fast, the \
+                 run-time loop flags each such step (faster_than_training)\n";
     }
     text += &format!("wrote {}\n", out.display());
     text

@@ -35,6 +35,7 @@ mod report_cmd;
 mod run_cmd;
 mod train_cmd;
 mod training_range;
+mod training_speed;
 
 use std::process::ExitCode;
 

@@ -107,6 +107,11 @@
 // extrapolates there and the estimate may hold a false torque the floor did not see.
 #define ADM_OUT_OUTSIDE_TRAINING_RANGE (1 << 12)
 
+// `AdmOutput::flags`: some joint moved faster than the observer's identification was
+// fitted at (its `summary.training_speed`, by more than its margin): the friction
+// extrapolates there and the estimate may hold a false torque the floor did not see.
+#define ADM_OUT_FASTER_THAN_TRAINING (1 << 13)
+
 // `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 // 1 us more per step on a 7-joint arm.
 #define ADM_CONFIG_WRENCH 1

@@ -85,6 +85,10 @@ pub const ADM_OUT_STALE_INPUT: u32 = 1 << 11;
 /// observer's identification was fitted on (its `summary.training_range`): the model
 /// extrapolates there and the estimate may hold a false torque the floor did not see.
 pub const ADM_OUT_OUTSIDE_TRAINING_RANGE: u32 = 1 << 12;
+/// `AdmOutput::flags`: some joint moved faster than the observer's identification was
+/// fitted at (its `summary.training_speed`, by more than its margin): the friction
+/// extrapolates there and the estimate may hold a false torque the floor did not see.
+pub const ADM_OUT_FASTER_THAN_TRAINING: u32 = 1 << 13;
 
 /// `AdmConfig::flags`: estimate the hand wrench each step (`AdmOutput::wrench`), about
 /// 1 us more per step on a 7-joint arm.

@@ -49,6 +49,7 @@ pub fn report_of(status: &RobotStatus, wrench: bool) -> StepReport {
         status.outside_training_range,
         ADM_OUT_OUTSIDE_TRAINING_RANGE,
     );
+    set(status.faster_than_training, ADM_OUT_FASTER_THAN_TRAINING);
     let contact = status.contact.unwrap_or_default();
     set(contact.contact, ADM_OUT_CONTACT);
     set(contact.collision, ADM_OUT_COLLISION);

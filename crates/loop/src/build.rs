@@ -118,16 +118,18 @@ fn estimate_source<Training>(
     };
     let stage = ObserverStage::new(observer, &settings)?
         .with_torque_delay(&fitted.delay_s, config.control_rate_hz)?
-        .with_training_range(fitted.training_range);
+        .with_training_range(fitted.training_range)
+        .with_training_speed(fitted.training_speed);
     Ok(EstimateSource::Observer(Box::new(stage)))
 }
 
-/// What an identification an observer runs on was fitted with: its torque delays and
-/// training range (both empty without one).
+/// What an identification an observer runs on was fitted with: its torque delays,
+/// training range and training speeds (all empty without one).
 #[derive(Default)]
 struct Fitted {
     delay_s: Vec<f64>,
     training_range: Vec<[f64; 2]>,
+    training_speed: Vec<f64>,
 }
 
 /// The external-torque observer (docs/method.md section 5) and, when it runs on an
@@ -149,6 +151,7 @@ fn observer<Training>(
             let fitted = Fitted {
                 delay_s: ident.summary.delay_s.clone(),
                 training_range: ident.summary.training_range.clone(),
+                training_speed: ident.summary.training_speed.clone(),
             };
             return Ok((observer, fitted));
         }

@@ -207,6 +207,16 @@ impl ClosedLoop {
         }
     }
 
+    /// Whether the observer's last input moved faster than its identification's training
+    /// speeds (`IdentificationSummary::training_speed`, beyond their margin); false when the
+    /// estimate runs on no identification or it records none.
+    pub fn observer_faster_than_training(&self) -> bool {
+        match &self.estimate_source {
+            EstimateSource::Observer(stage) => stage.faster_than_training(),
+            _ => false,
+        }
+    }
+
     /// The compliant reference `q_r` of the last step.
     pub fn q_r(&self) -> &[f64] {
         &self.q_r

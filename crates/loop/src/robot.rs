@@ -80,6 +80,11 @@ pub struct RobotStatus {
     /// extrapolate there, so the estimate may hold a false torque its floor did not see.
     /// Never set without an identification that records its range.
     pub outside_training_range: bool,
+    /// Some joint moved faster than the observer's identification was fitted at
+    /// (`summary.training_speed`, beyond `TRAINING_SPEED_MARGIN`; its velocity conditioned
+    /// as fitted): its friction extrapolates there. Never set without an identification
+    /// that records its speeds, nor before the step's observer update.
+    pub faster_than_training: bool,
     /// Contact flags (issue 31), with a contact floor.
     pub contact: Option<ContactState>,
 }
@@ -315,6 +320,7 @@ impl RobotLoop {
             holding_pose: input.desired.is_none(),
             stale_input,
             outside_training_range,
+            faster_than_training: false,
             contact: self.contact.as_ref().map(|c| c.state()),
         };
         if waiting {
@@ -374,6 +380,7 @@ impl RobotLoop {
         self.estimate
             .copy_from_slice(self.closed_loop.external_torque_estimate());
         status.observer_fault = !result.observer_ok;
+        status.faster_than_training = self.closed_loop.observer_faster_than_training();
         if let StepStatus::Fault(f) = result.controller {
             status.controller_fault = Some(f);
         }

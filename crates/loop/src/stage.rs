@@ -26,6 +26,10 @@ pub struct ObserverStage {
     /// Per joint, the positions `[min, max]` the observer's identification was fitted on
     /// (empty without an identification that records them).
     training_range: Vec<[f64; 2]>,
+    /// Per joint, the highest speed the identification was fitted at (empty: none).
+    training_speed: Vec<f64>,
+    /// Whether the last input's velocity exceeded `training_speed` (beyond its margin).
+    faster_than_training: bool,
 }
 
 /// How an [`ObserverStage`] feeds its observer and shapes its estimate (the `[observer]`
@@ -73,6 +77,8 @@ impl ObserverStage {
             alpha,
             warmup: settings.warmup,
             training_range: Vec::new(),
+            training_speed: Vec::new(),
+            faster_than_training: false,
         })
     }
 
@@ -106,6 +112,20 @@ impl ObserverStage {
     /// it records none, or the observer runs on no identification).
     pub(crate) fn training_range(&self) -> &[[f64; 2]] {
         &self.training_range
+    }
+
+    /// The stage with the training speeds of its observer's identification
+    /// (`IdentificationSummary::training_speed`; empty: none recorded).
+    pub fn with_training_speed(mut self, highest: Vec<f64>) -> Self {
+        self.training_speed = highest;
+        self
+    }
+
+    /// Whether the velocity of the last input the observer was fed (conditioned and delayed
+    /// as its identification was fitted) exceeded the identification's training speeds by
+    /// more than their margin ([`admittance_dynamics::faster_than_training`]).
+    pub(crate) fn faster_than_training(&self) -> bool {
+        self.faster_than_training
     }
 
     /// Updates `estimate` from the measurement at `time`; false when the observer
@@ -155,6 +175,8 @@ impl ObserverStage {
             }
             None => input,
         };
+        self.faster_than_training =
+            admittance_dynamics::faster_than_training(&self.training_speed, input.qdot);
         let ok = self.observer.update(&input, dt, &mut self.raw).is_ok();
         if time < self.warmup {
             self.raw.fill(0.0);

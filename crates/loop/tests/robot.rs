@@ -597,6 +597,52 @@ fn an_angle_outside_the_identifications_training_range_is_flagged() {
     assert!(flagged(&narrow, true) > 100);
 }
 
+#[test]
+fn a_speed_beyond_the_identifications_training_speeds_is_flagged() {
+    // The slow motion moves joint 3 at up to 0.19 rad/s; an identification trained on it at
+    // up to 0.1 rad/s (every other joint at up to 1 rad/s) sees that joint faster than
+    // trained (beyond the margin: 0.15 rad/s) for part of the motion, and nothing else. Without recorded speeds nothing is
+    // ever flagged.
+    let tmp = tempfile::tempdir().unwrap();
+    let model = model();
+    let mut ident = admittance_dynamics::Identification::from_model(model.clone());
+    let save = |ident: &admittance_dynamics::Identification, name: &str| {
+        save_identification(tmp.path(), &model, ident, name)
+    };
+    let unrecorded = save(&ident, "unrecorded.json");
+    ident.summary.training_speed = vec![1.0; 7];
+    ident.summary.training_speed[3] = 0.1;
+    let slow = save(&ident, "slow.json");
+    let flagged = |file: &str, joint3_only: bool| {
+        let mut l = loop_on_identification(&model, file);
+        let mut data = Data::new(&model);
+        let (mut count, mut checked) = (0, 0);
+        for k in 0..3000 {
+            let (q, tau) = motion(&model, &mut data, k);
+            let s = step_measured(&mut l, k, &q, &tau);
+            // The exact speed; the observer's is filtered (10 Hz and the chain's 20 Hz, about
+            // 0.01 rad/s behind at this speed), so steps near the threshold and the filters'
+            // start are not judged.
+            let w = 1.9;
+            let speed = (0.1 * w * (w * k as f64 * 1e-3).cos()).abs();
+            let threshold = 0.1 * (1.0 + admittance_dynamics::TRAINING_SPEED_MARGIN);
+            if joint3_only && k > 300 && (speed - threshold).abs() > 0.02 {
+                assert_eq!(
+                    s.faster_than_training,
+                    speed > threshold,
+                    "step {k}: {speed}"
+                );
+                checked += 1;
+            }
+            count += usize::from(s.faster_than_training);
+        }
+        assert!(!joint3_only || checked > 1000, "{checked}");
+        count
+    };
+    assert_eq!(flagged(&unrecorded, false), 0);
+    assert!(flagged(&slow, true) > 300);
+}
+
 /// The arm with its last wrist joint made continuous (no position limits).
 fn continuous_w2_model() -> Model {
     let text = std::fs::read_to_string(URDF).unwrap().replace(

@@ -260,6 +260,32 @@ impl PyIdentification {
         json_to_py(py, &serde_json::Value::Array(list))
     }
 
+    /// Per joint, how the velocities `qdot` (`(n,)` or `(N, n)`, conditioned as the
+    /// identification was) exceed `summary["training_speed"]` by more than half of it: a list of
+    /// dicts with `samples_faster` and `fastest` (the highest speed, rad/s or m/s); empty
+    /// when the identification records no speeds.
+    fn speed_excursions<'py>(
+        &self,
+        py: Python<'py>,
+        qdot: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.identification.model.nq();
+        let (qdot, _, single) = rows(qdot, "qdot", n, true)?;
+        crate::convert::require_finite_rows(&qdot, n, single, "qdot")?;
+        let list: Vec<serde_json::Value> = self
+            .identification
+            .speed_excursions(&qdot)
+            .iter()
+            .map(|e| {
+                serde_json::json!({
+                    "samples_faster": e.samples_faster,
+                    "fastest": e.fastest,
+                })
+            })
+            .collect();
+        json_to_py(py, &serde_json::Value::Array(list))
+    }
+
     /// The torque (N m) the identified arm needs: `(n,)` for one state, `(N, n)` for rows.
     fn predict<'py>(
         &self,

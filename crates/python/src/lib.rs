@@ -49,6 +49,14 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "COULOMB_WIDTH_CANDIDATES",
         admittance_dynamics::COULOMB_WIDTH_CANDIDATES.to_vec(),
     )?;
+    m.add(
+        "TRAINING_RANGE_MARGIN",
+        admittance_dynamics::TRAINING_RANGE_MARGIN,
+    )?;
+    m.add(
+        "TRAINING_SPEED_MARGIN",
+        admittance_dynamics::TRAINING_SPEED_MARGIN,
+    )?;
     m.add_class::<model::PyModel>()?;
     for f in [
         wrap_pyfunction!(model::rnea, m)?,

@@ -124,7 +124,8 @@ impl PyRobotLoop {
     /// What the last step saw: `ok`, `controller_fault` (text or None), `observer_fault`,
     /// `nonfinite_input`, `implausible` (None or `(joint, "angle" | "jump" | "torque")`),
     /// `waiting_for_angles`, `warmup`, `holding_pose`, `stale_input`, `outside_training_range`
-    /// (an angle outside the positions the identification was fitted on), `contact` (None or
+    /// (an angle outside the positions the identification was fitted on),
+    /// `faster_than_training` (a velocity beyond the speeds it was fitted at), `contact` (None or
     /// a dict of `contact`, `collision`, `link`); None before the first step.
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
@@ -156,6 +157,7 @@ impl PyRobotLoop {
         d.set_item("holding_pose", s.holding_pose)?;
         d.set_item("stale_input", s.stale_input)?;
         d.set_item("outside_training_range", s.outside_training_range)?;
+        d.set_item("faster_than_training", s.faster_than_training)?;
         match s.contact {
             Some(c) => {
                 let cd = PyDict::new(py);

@@ -309,6 +309,23 @@ def test_the_summary_records_the_training_range(baxter, truth_and_data):
         ident.range_excursions(q[:, :3])
 
 
+def test_the_summary_records_the_training_speeds(baxter, truth_and_data):
+    """Each joint's highest speed fitted at (raw signals: the recorded velocities), so that a
+    consumer can tell motion faster than that, where the friction extrapolates."""
+    _, data = truth_and_data
+    ident = adm.identify(data, baxter, input_filter_hz=0)
+    qd = np.asarray(data["qdot"])
+    assert np.array_equal(np.asarray(ident.summary["training_speed"]), np.abs(qd).max(axis=0))
+    assert all(e["samples_faster"] == 0 for e in ident.speed_excursions(qd))
+    faster = qd.copy()
+    faster[:, 4] *= 2.0
+    e = ident.speed_excursions(faster)
+    assert [x["samples_faster"] > 0 for x in e] == [i == 4 for i in range(baxter.n)]
+    assert e[4]["fastest"] == np.abs(faster[:, 4]).max()
+    with pytest.raises(ValueError):
+        ident.speed_excursions(qd[:, :3])
+
+
 def test_the_mass_bound_is_a_setting_with_a_check(baxter, truth_and_data):
     """`max_mass_ratio` reaches the fit (the summary records it; None lifts the bound) and a
     ratio below 1 is refused by name before anything is fitted."""

@@ -69,6 +69,7 @@ def test_safe_by_default(deployed):
     assert loop.status["holding_pose"]
     # An observer on the URDF has no training range: never outside it.
     assert loop.status["outside_training_range"] is False
+    assert loop.status["faster_than_training"] is False
     np.testing.assert_allclose(loop.reference[0], POSE, atol=1e-9)
 
 

@@ -462,6 +462,7 @@ pub fn status_message(status: &RobotStatus) -> Float64MultiArray {
         flag(status.holding_pose),
         flag(status.stale_input),
         flag(status.outside_training_range),
+        flag(status.faster_than_training),
     ];
     Float64MultiArray {
         layout: MultiArrayLayout {
@@ -478,7 +479,7 @@ pub fn status_message(status: &RobotStatus) -> Float64MultiArray {
 
 /// The label of the status message's dimension: the flags in order.
 pub const STATUS_LABEL: &str = "controller_fault,observer_fault,nonfinite_input,implausible_input,\
-waiting_for_angles,warmup,holding_pose,stale_input,outside_training_range";
+waiting_for_angles,warmup,holding_pose,stale_input,outside_training_range,faster_than_training";
 
 /// The message types the bridge publishes (for the node and the docs).
 pub const OUTPUT_TYPES: [&str; 3] = [JOINT_STATE, WRENCH_STAMPED, FLOAT64_MULTI_ARRAY];

@@ -84,7 +84,7 @@ pub struct BridgeArgs {
     pub contact_topic: String,
     /// Topic of the loop's status flags after each torque message (Float64MultiArray `[controller_fault,
     /// observer_fault, nonfinite_input, implausible_input, waiting_for_angles, warmup,
-    /// holding_pose, stale_input, outside_training_range]`, 1 or 0).
+    /// holding_pose, stale_input, outside_training_range, faster_than_training]`, 1 or 0).
     #[arg(long, default_value = "/admittance/status")]
     pub status_topic: String,
     /// Also publish the admittance model's compliant reference (JointState position and

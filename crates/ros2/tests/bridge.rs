@@ -278,18 +278,28 @@ fn status_flags_follow_the_loop_and_their_label() {
     }
     assert_eq!(at(&m, "stale_input"), 0.0);
     assert_eq!(at(&m, "outside_training_range"), 0.0);
+    assert_eq!(at(&m, "faster_than_training"), 0.0);
     // Each flag lands under its own name.
     let mut status = stepped.status;
     status.stale_input = true;
     status.outside_training_range = true;
+    status.faster_than_training = true;
     let m = status_message(&status);
     assert_eq!(at(&m, "stale_input"), 1.0);
     assert_eq!(at(&m, "outside_training_range"), 1.0);
+    assert_eq!(at(&m, "faster_than_training"), 1.0);
     assert_eq!(at(&m, "controller_fault"), 0.0);
     let before = status_message(&stepped.status);
     let changed: Vec<&str> = (0..names.len())
         .filter(|&k| m.data[k] != before.data[k])
         .map(|k| names[k])
         .collect();
-    assert_eq!(changed, ["stale_input", "outside_training_range"]);
+    assert_eq!(
+        changed,
+        [
+            "stale_input",
+            "outside_training_range",
+            "faster_than_training"
+        ]
+    );
 }

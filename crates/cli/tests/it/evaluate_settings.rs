@@ -401,3 +401,85 @@ fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
         "{warned}"
     );
 }
+
+#[test]
+fn evaluate_names_the_joints_that_move_faster_than_trained() {
+    let f = files();
+    let eval = |data: &str| {
+        ok(&[
+            "evaluate",
+            "--data",
+            data,
+            "--urdf",
+            &f.urdf,
+            "--identification",
+            &f.ident10,
+        ])
+    };
+    let heading = "faster than the identification's training speeds";
+    // The training recording itself stays within them.
+    let within = eval(&f.train);
+    assert!(!within.contains(heading), "{within}");
+    // The same motion played twice as fast (time halved, velocities doubled, accelerations
+    // four times): the same positions, every joint faster than trained.
+    let text = std::fs::read_to_string(&f.train).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let factor = |c: &str| match c.split('.').next() {
+        Some("t") => 0.5,
+        Some("qdot") => 2.0,
+        Some("qddot") => 4.0,
+        _ => 1.0,
+    };
+    let factors: Vec<f64> = header.split(',').map(factor).collect();
+    let mut faster = format!("{header}\n");
+    for line in lines {
+        let cells: Vec<String> = line
+            .split(',')
+            .zip(&factors)
+            .map(|(c, k)| (c.parse::<f64>().unwrap() * k).to_string())
+            .collect();
+        faster += &(cells.join(",") + "\n");
+    }
+    let path = f.path("faster.csv");
+    std::fs::write(&path, faster).unwrap();
+    let printed = eval(&path);
+    assert!(printed.contains(heading), "{printed}");
+    assert!(
+        !printed.contains("outside the identification's training range"),
+        "{printed}"
+    );
+    let listed: Vec<&str> = printed
+        .lines()
+        .skip_while(|l| !l.starts_with(heading))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .collect();
+    assert_eq!(listed.len(), 7, "{printed}");
+    // Each joint's fastest sample about twice its training speed.
+    for line in listed {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let at = |w: &str| words.iter().position(|x| *x == w).unwrap();
+        let fastest: f64 = words[at("to") + 1].parse().unwrap();
+        let trained: f64 = words[at("against") + 1].parse().unwrap();
+        let ratio = fastest / trained;
+        assert!((ratio - 2.0).abs() < 0.15, "{line}");
+    }
+    // A contact floor calibrated there is warned about, naming the file and each joint.
+    let calibrate = |data: &str| {
+        ok(&[
+            "calibrate-contact",
+            data,
+            "--identification",
+            &f.ident10,
+            "--out",
+            &f.path("floor.json"),
+        ])
+    };
+    let warning = "faster than the identification's training speeds";
+    assert!(!calibrate(&f.train).contains(warning));
+    let warned = calibrate(&path);
+    let lines: Vec<&str> = warned.lines().filter(|l| l.contains(warning)).collect();
+    assert_eq!(lines.len(), 7, "{warned}");
+    assert!(lines.iter().all(|l| l.contains("faster.csv")), "{warned}");
+}

@@ -352,6 +352,22 @@ fn check_summary(s: &IdentificationSummary, n: usize) -> Result<(), String> {
             short(*high)
         ));
     }
+    if !(s.training_speed.is_empty() || s.training_speed.len() == n) {
+        return Err(format!(
+            "summary.training_speed has {} values for {n} joints",
+            s.training_speed.len()
+        ));
+    }
+    if let Some(v) = s
+        .training_speed
+        .iter()
+        .find(|v| !(**v >= 0.0 && v.is_finite()))
+    {
+        return Err(format!(
+            "summary.training_speed holds {}: each joint's highest training speed, finite and not negative",
+            short(*v)
+        ));
+    }
     let errors = [
         ("expected_false_torque_rms", &s.expected_false_torque_rms),
         ("prior_false_torque_rms", &s.prior_false_torque_rms),

@@ -19,6 +19,7 @@ use crate::identification::samples::Samples;
 use crate::identification::settings::{IdentificationSettings, COULOMB_WIDTH_CANDIDATES};
 use crate::identification::springs::{choose_springs, joint_column, Choice};
 use crate::identification::training_range::training_range;
+use crate::identification::training_speed::training_speed;
 use crate::identification::urdf_torques::UrdfTorques;
 use crate::identification::{Identification, IdentificationSummary};
 use crate::model::Model;
@@ -266,6 +267,7 @@ pub fn identify(
         acceleration_gain,
         prior_scale,
         training_range: range,
+        training_speed: training_speed(train),
     };
     Ok(Identification {
         summary,

@@ -32,6 +32,7 @@ mod samples;
 mod settings;
 mod springs;
 mod training_range;
+mod training_speed;
 mod urdf_torques;
 
 pub use base::BaseParameters;
@@ -49,6 +50,9 @@ pub use settings::{IdentificationSettings, COULOMB_WIDTH_CANDIDATES};
 pub use training_range::{
     beyond_training_range, beyond_training_range_of, outside_training_range, RangeExcursion,
     TRAINING_RANGE_MARGIN,
+};
+pub use training_speed::{
+    beyond_training_speed, faster_than_training, SpeedExcursion, TRAINING_SPEED_MARGIN,
 };
 
 use serde::{Deserialize, Serialize};
@@ -145,6 +149,12 @@ pub struct IdentificationSummary {
     /// the samples that leave it ([`Identification::range_excursions`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub training_range: Vec<[f64; 2]>,
+    /// Per joint, the highest speed `|q'|` of the training samples, conditioned as they
+    /// were fitted (rad/s or m/s; empty: not recorded). Faster the fitted friction
+    /// extrapolates: `admittance evaluate` reports the samples that exceed it
+    /// ([`Identification::speed_excursions`]) and the run-time loop flags each such step.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub training_speed: Vec<f64>,
 }
 
 fn unit_gain() -> f64 {
@@ -353,6 +363,7 @@ impl IdentificationSummary {
             acceleration_gain: 1.0,
             prior_scale: 1.0,
             training_range: Vec::new(),
+            training_speed: Vec::new(),
         }
     }
 }

@@ -154,6 +154,19 @@ fn what_consumers_take_from_the_summary_is_checked() {
     .unwrap_err();
     assert!(e.contains("summary.training_range holds [1, -1]"), "{e}");
     let e = load_edited(dir.path(), |p| {
+        p["summary"]["training_speed"] = serde_json::json!([0.5, 0.5])
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("summary.training_speed has 2 values for 7 joints"),
+        "{e}"
+    );
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["training_speed"] = serde_json::json!([0.5, 0.5, -0.5, 0.5, 0.5, 0.5, 0.5])
+    })
+    .unwrap_err();
+    assert!(e.contains("summary.training_speed holds -0.5"), "{e}");
+    let e = load_edited(dir.path(), |p| {
         p["summary"]["expected_false_torque_rms"] = serde_json::json!([0.1, -1.0])
     })
     .unwrap_err();

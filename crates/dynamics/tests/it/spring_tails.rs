@@ -60,6 +60,16 @@ fn a_spring_continues_along_its_tangent_beyond_the_training_range() {
     );
     let range = ident.summary.training_range[shoulder];
     assert_eq!(ident.joint_terms[shoulder].spring_range, Some(range));
+    // Each joint's highest training speed is recorded beside its range.
+    for (i, &top) in ident.summary.training_speed.iter().enumerate() {
+        let highest = qd
+            .iter()
+            .skip(i)
+            .step_by(n)
+            .fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert_eq!(top, highest, "joint {i}");
+    }
+    assert_eq!(ident.summary.training_speed.len(), n);
     // Other motion, the shoulder 0.6 rad lower: up to 0.6 rad below its training range.
     let (mut q2, qd2, qdd2) = motion(&urdf, 1.7, 20.0);
     q2.iter_mut()

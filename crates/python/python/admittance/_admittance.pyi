@@ -20,6 +20,12 @@ ArrayLike = npt.ArrayLike
 DEFAULT_SIGNAL_CUTOFF_HZ: float
 #: The Coulomb widths (rad/s) ``identify`` chooses among when none is given; 0.01 first.
 COULOMB_WIDTH_CANDIDATES: list[float]
+#: How far beyond a joint's training range (a share of its span) a position counts as
+#: outside it (``Identification.range_excursions``, the loop's ``outside_training_range``).
+TRAINING_RANGE_MARGIN: float
+#: How far beyond a joint's highest training speed (a share of it) a speed counts as faster
+#: than trained (``Identification.speed_excursions``, the loop's ``faster_than_training``).
+TRAINING_SPEED_MARGIN: float
 Vector = npt.Vector
 Matrix = npt.Vector
 StrPath = Union[str, "PathLike[str]"]
@@ -660,6 +666,10 @@ class Identification:
         """Per joint, how the positions ``q`` (``(n,)`` or ``(N, n)``, conditioned as the
         identification was) leave ``summary["training_range"]``: ``samples_outside``,
         ``furthest`` (rad or m beyond), ``lowest``, ``highest``; empty without a range."""
+    def speed_excursions(self, qdot: ArrayLike) -> List[dict]:
+        """Per joint, how the velocities ``qdot`` (``(n,)`` or ``(N, n)``, conditioned as the
+        identification was) exceed ``summary["training_speed"]`` by more than half of it:
+        ``samples_faster``, ``fastest`` (rad/s or m/s); empty without recorded speeds."""
     def save(self, path: StrPath, data: Optional[str] = None) -> None:
         """Writes the identification file (JSON, versioned, checksummed, atomic)."""
     def with_payload(self, payload: "Payload") -> "Identification":
