@@ -5,7 +5,9 @@
 use std::path::Path;
 
 use admittance_control::{ContactFloor, JointValues, MomentumObserverConfig};
-use admittance_dynamics::Identification;
+use admittance_dynamics::{
+    faster_than_training, outside_training_range, Identification, JointKind,
+};
 use admittance_scenario::FreeMotionData;
 
 use crate::CliError;
@@ -78,5 +80,55 @@ pub fn false_alarm_table(
         fa.contact_events_by_link,
         100.0 * fa.contact_fraction
     );
+    if !ident.summary.training_range.is_empty() || !ident.summary.training_speed.is_empty() {
+        let (events, share) = extrapolating_events(&floor, &e, &ident, data, input_filter_hz)?;
+        s += &format!(
+            "contact events starting where the motion leaves the identification's training range or \
+             speeds: {events} of {} (there: {:.1} % of the samples, where its model extrapolates)\n",
+            fa.contact_events,
+            100.0 * share
+        );
+    }
     Ok(s)
+}
+
+/// Of the contact events of `floor` over the estimates `e` (the last samples of `data`,
+/// after the warm-up), how many start on a sample outside `ident`'s training range (its
+/// conditioned angle) or faster than its training speeds (the velocity the observer saw),
+/// and the share of those samples.
+fn extrapolating_events(
+    floor: &ContactFloor,
+    e: &admittance_scenario::FreeMotionEstimates,
+    ident: &Identification,
+    data: &FreeMotionData,
+    input_filter_hz: f64,
+) -> Result<(usize, f64), CliError> {
+    let n = e.joints;
+    let states =
+        admittance_scenario::detect(floor, e).map_err(|err| CliError::input(err.to_string()))?;
+    let conditioned = admittance_scenario::ConditionedSamples::new(data, input_filter_hz)
+        .map_err(CliError::input)?;
+    let rows = conditioned.q.len() / n.max(1);
+    let first = rows.saturating_sub(states.len());
+    let continuous: Vec<bool> = ident
+        .model
+        .joints
+        .iter()
+        .map(|j| j.kind == JointKind::Continuous)
+        .collect();
+    let (mut events, mut samples) = (0, 0);
+    let mut last_contact = false;
+    for (k, state) in states.iter().enumerate() {
+        let q = conditioned
+            .q
+            .get((first + k) * n..(first + k + 1) * n)
+            .unwrap_or(&[]);
+        let qdot = &e.qdot[k * n..(k + 1) * n];
+        let there = outside_training_range(&ident.summary.training_range, q, &continuous)
+            || faster_than_training(&ident.summary.training_speed, qdot);
+        samples += usize::from(there);
+        events += usize::from(there && state.contact && !last_contact);
+        last_contact = state.contact;
+    }
+    Ok((events, samples as f64 / states.len().max(1) as f64))
 }

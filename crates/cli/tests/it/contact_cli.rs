@@ -124,6 +124,69 @@ fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
 }
 
+/// `evaluate --contact-floor` says how many contact events start where the motion leaves the
+/// identification's training range or speeds: on a task three times faster than the
+/// training every event does, on the training recording none.
+#[test]
+fn false_alarms_are_attributed_to_motion_faster_than_trained() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    let ident = identified(dir.path());
+    let held_out = free_motion_csv(dir.path(), 1.9, 60.0);
+    let other = free_motion_csv(dir.path(), 2.7, 30.0);
+    let faster = dir.path().join("faster.csv");
+    crate::free_motion::played_faster(&other, &faster, 3.0);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let floor = dir.path().join("floor.json");
+    let o = admittance(&[
+        "calibrate-contact",
+        &s(&held_out),
+        "--identification",
+        &s(&ident),
+        "--out",
+        &s(&floor),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let counts = |data: &Path| {
+        let o = admittance(&[
+            "evaluate",
+            "--data",
+            &s(data),
+            "--urdf",
+            &s(&urdf),
+            "--identification",
+            &s(&ident),
+            "--contact-floor",
+            &s(&floor),
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        let table = text(&o);
+        let line = table
+            .lines()
+            .find(|l| l.starts_with("contact events starting where"))
+            .unwrap_or_else(|| panic!("no attribution in\n{table}"))
+            .to_string();
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let at = |w: &str| words.iter().position(|x| *x == w).unwrap();
+        let there: usize = words[at("of") - 1].parse().unwrap();
+        let events: usize = words[at("of") + 1].parse().unwrap();
+        let share: f64 = words[at("(there:") + 1].parse().unwrap();
+        (there, events, share, table)
+    };
+    // Three times as fast, the arm's dynamics no longer match its torques: the floor
+    // flags, and more than half the samples lie beyond the training speeds (the velocity
+    // crosses zero on the rest).
+    let (there, events, share, table) = counts(&faster);
+    assert!(events > 0, "{table}");
+    assert_eq!(there, events, "{table}");
+    assert!(share > 50.0, "{table}");
+    // The recording the identification was fitted on lies within its range and speeds.
+    let (there, _, share, table) = counts(&dir.path().join("free_0.3.csv"));
+    assert_eq!((there, share), (0, 0.0), "{table}");
+    let (there, events, _, table) = counts(&other);
+    assert!(there <= events, "{table}");
+}
+
 /// Several recordings are pooled into one floor (each after its own warm-up); a recording
 /// of another arm is refused, naming it.
 #[test]

@@ -420,29 +420,10 @@ fn evaluate_names_the_joints_that_move_faster_than_trained() {
     // The training recording itself stays within them.
     let within = eval(&f.train);
     assert!(!within.contains(heading), "{within}");
-    // The same motion played twice as fast (time halved, velocities doubled, accelerations
-    // four times): the same positions, every joint faster than trained.
-    let text = std::fs::read_to_string(&f.train).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap();
-    let factor = |c: &str| match c.split('.').next() {
-        Some("t") => 0.5,
-        Some("qdot") => 2.0,
-        Some("qddot") => 4.0,
-        _ => 1.0,
-    };
-    let factors: Vec<f64> = header.split(',').map(factor).collect();
-    let mut faster = format!("{header}\n");
-    for line in lines {
-        let cells: Vec<String> = line
-            .split(',')
-            .zip(&factors)
-            .map(|(c, k)| (c.parse::<f64>().unwrap() * k).to_string())
-            .collect();
-        faster += &(cells.join(",") + "\n");
-    }
+    // The same motion played twice as fast: the same positions, every joint faster than
+    // trained.
     let path = f.path("faster.csv");
-    std::fs::write(&path, faster).unwrap();
+    crate::free_motion::played_faster(Path::new(&f.train), Path::new(&path), 2.0);
     let printed = eval(&path);
     assert!(printed.contains(heading), "{printed}");
     assert!(
