@@ -207,6 +207,16 @@ impl ClosedLoop {
         }
     }
 
+    /// Per joint, the highest speed the observer's identification was fitted at
+    /// (`IdentificationSummary::training_speed`); empty when the estimate runs on no
+    /// identification or it records none.
+    pub fn observer_training_speed(&self) -> &[f64] {
+        match &self.estimate_source {
+            EstimateSource::Observer(stage) => stage.training_speed(),
+            _ => &[],
+        }
+    }
+
     /// Whether the observer's last input moved faster than its identification's training
     /// speeds (`IdentificationSummary::training_speed`, beyond their margin); false when the
     /// estimate runs on no identification or it records none.

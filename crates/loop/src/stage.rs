@@ -128,6 +128,12 @@ impl ObserverStage {
         self.faster_than_training
     }
 
+    /// Per joint, the highest speed the observer's identification was fitted at (empty
+    /// when it records none, or the observer runs on no identification).
+    pub(crate) fn training_speed(&self) -> &[f64] {
+        &self.training_speed
+    }
+
     /// Updates `estimate` from the measurement at `time`; false when the observer
     /// reported a fault.
     pub(crate) fn update(

@@ -91,6 +91,8 @@ metrics! {
     FAULTS = "faults", "", false, WholeRun, "control steps with a controller fault (safe hold applied)";
     STALE_MEASUREMENTS = "stale_measurements", "", false, WholeRun, "control steps on which some joint's encoder reading was stale (frozen or dropped)";
     OBSERVER_FAULTS = "observer_faults", "", false, WholeRun, "observer updates that reported a fault";
+    STEPS_OUTSIDE_TRAINING_RANGE = "steps_outside_training_range", "", false, WholeRun, "control steps with some joint's angle outside the observer's identification's training range";
+    STEPS_FASTER_THAN_TRAINING = "steps_faster_than_training", "", false, WholeRun, "control steps with some joint faster than the observer's identification was fitted at";
     GATED_SAMPLES = "gated_samples", "", false, WholeRun, "samples the plausibility gates refused, by the gate of the first refused value (angle, jump, torque)";
     TORQUE_LIMIT_VIOLATIONS = "torque_limit_violations", "", false, WholeRun, "commands beyond the effort limit (must be 0)";
     NONFINITE_TORQUES = "nonfinite_torques", "", false, WholeRun, "commands that were not finite (must be 0)";

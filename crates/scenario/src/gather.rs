@@ -2,7 +2,7 @@
 //! step's counts (faults, limits, timing), the evaluation window's statistics and the run's
 //! health.
 
-use admittance_dynamics::Model;
+use admittance_dynamics::{outside_training_range, JointKind, Model};
 use admittance_loop::{ClosedLoop, LoopStatus, Measurement};
 use admittance_sim::StepRecord;
 
@@ -24,6 +24,12 @@ pub(crate) struct Gather {
     limit_violations: usize,
     nonfinite_torques: usize,
     observer_faults: usize,
+    /// Steps outside the observer's identification's training range and faster than its
+    /// training speeds (each `None` while it records none).
+    outside_training_range: Option<usize>,
+    faster_than_training: Option<usize>,
+    /// Per joint, whether it turns without limit (its angle counts on the nearest turn).
+    continuous: Vec<bool>,
     tracking: JointStats,
     torque: JointStats,
     estimate_error: JointStats,
@@ -70,6 +76,13 @@ impl Gather {
             limit_violations: 0,
             nonfinite_torques: 0,
             observer_faults: 0,
+            outside_training_range: None,
+            faster_than_training: None,
+            continuous: model
+                .joints
+                .iter()
+                .map(|j| j.kind == JointKind::Continuous)
+                .collect(),
             tracking: JointStats::new(n),
             torque: JointStats::new(n),
             estimate_error: JointStats::new(n),
@@ -83,16 +96,27 @@ impl Gather {
         }
     }
 
-    /// After the loop's step `k`: faults, timing, the command against the effort limits.
+    /// After the loop's step `k` on the measured angles `q`: faults, timing, the command
+    /// against the effort limits, where the observer's identification extrapolated.
     pub fn after_control(
         &mut self,
         k: usize,
         status: &LoopStatus,
         lp: &ClosedLoop,
+        q: &[f64],
         stale_sample: bool,
     ) {
         if !status.observer_ok {
             self.observer_faults += 1;
+        }
+        let range = lp.observer_training_range();
+        if !range.is_empty() {
+            let outside = outside_training_range(range, q, &self.continuous);
+            *self.outside_training_range.get_or_insert(0) += usize::from(outside);
+        }
+        if !lp.observer_training_speed().is_empty() {
+            let faster = lp.observer_faster_than_training();
+            *self.faster_than_training.get_or_insert(0) += usize::from(faster);
         }
         if k.is_multiple_of(self.timing_stride)
             && self.step_times.len() < self.step_times.capacity()
@@ -192,6 +216,8 @@ impl Gather {
             steps: self.steps,
             external_torque_rmse: self.estimate_error.rms(),
             observer_faults: self.observer_faults,
+            steps_outside_training_range: self.outside_training_range,
+            steps_faster_than_training: self.faster_than_training,
             estimate_coverage_min: self.coverage.map(|(min, _)| min),
             estimate_coverage_mean: self
                 .coverage

@@ -71,6 +71,15 @@ pub struct VariantMetrics {
     /// Mean coverage over the evaluation window.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub estimate_coverage_mean: Option<f64>,
+    /// Control steps on which some joint's measured angle lay outside the training range of
+    /// the observer's identification (absent when it records none): its model extrapolated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps_outside_training_range: Option<usize>,
+    /// Control steps on which some joint moved faster than the observer's identification was
+    /// fitted at, beyond `TRAINING_SPEED_MARGIN` (absent when it records no speeds): its
+    /// friction extrapolated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps_faster_than_training: Option<usize>,
     /// How a learned observer's network was obtained.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub observer_training: Option<ObserverTrainingMetrics>,
@@ -306,6 +315,8 @@ mod tests {
             admittance_error_rms: Some(vec![0.0]),
             estimate_coverage_min: Some(1.0),
             estimate_coverage_mean: Some(1.0),
+            steps_outside_training_range: Some(0),
+            steps_faster_than_training: Some(0),
             observer_training: Some(ObserverTrainingMetrics {
                 train_seconds: 1.0,
                 observer_nodes: 1,

@@ -188,7 +188,8 @@ impl StepGather {
         }
         let k = self.k;
         self.k += 1;
-        self.gather.after_control(k, status, lp, stale_sample);
+        self.gather
+            .after_control(k, status, lp, &measurement.q, stale_sample);
         if self
             .gather
             .diverged(time, plant.q, plant.qdot, measurement, lp)

@@ -21,8 +21,9 @@ use crate::spec::Scenario;
 /// Version of what an identification cache key stands for (bump when it changes; 2: the
 /// convex physical fit of issue 30, whose results differ from the first fit's; 3: springs
 /// kept within the effort limit over the joint's range; 4: springs continued along their
-/// tangent beyond the training range).
-const IDENTIFICATION_KEY_VERSION: u32 = 4;
+/// tangent beyond the training range; 5: the training speeds recorded, which the loop flags
+/// motion beyond).
+const IDENTIFICATION_KEY_VERSION: u32 = 5;
 
 /// An identification of the scenario's arm, and the file the loop loads it from.
 pub struct IdentifiedNominal {

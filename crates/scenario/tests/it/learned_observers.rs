@@ -111,11 +111,21 @@ fn learned_variants_train_validate_cache_and_estimate() {
         );
         let expected = per_joint(r, "identification_expected_false_torque_rms");
         assert_eq!(expected.len(), 7, "{}", r.name);
+        // The identification records its range and speeds: the steps beyond them are
+        // counted (a count of the run's steps).
+        for key in ["steps_outside_training_range", "steps_faster_than_training"] {
+            assert!(number(r, key) <= number(r, "steps"), "{} {key}", r.name);
+        }
         assert!(
             expected.iter().all(|x| x.is_finite() && *x >= 0.0),
             "{expected:?}"
         );
     }
+    // Without an identification nothing is counted.
+    assert!(!momentum
+        .metrics
+        .to_map()
+        .contains_key("steps_faster_than_training"));
     // The second use of the same data and settings reads the identification back.
     assert_eq!(
         common::metric(&momentum_identified, "identification_cached"),
