@@ -28,14 +28,19 @@ pub fn lines(ident: &Identification, arm: &Model, q: &[f64]) -> Vec<String> {
 
 /// [`lines`] under a heading that says what they mean and what to do (empty when none).
 pub fn report(ident: &Identification, arm: &Model, q: &[f64]) -> String {
-    let lines = lines(ident, arm, q);
+    under_heading(
+        "outside the identification's training range (its springs, offsets and gravity extrapolate there; \
+         record motion that covers these positions and identify again):",
+        lines(ident, arm, q),
+    )
+}
+
+/// `lines`, indented, below `heading`; empty when there are none.
+pub fn under_heading(heading: &str, lines: Vec<String>) -> String {
     if lines.is_empty() {
         return String::new();
     }
-    let mut text = String::from(
-        "outside the identification's training range (its springs, offsets and gravity extrapolate there; \
-         record motion that covers these positions and identify again):\n",
-    );
+    let mut text = format!("{heading}\n");
     for line in lines {
         text += &format!("  {line}\n");
     }

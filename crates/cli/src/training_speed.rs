@@ -27,16 +27,9 @@ pub fn lines(ident: &Identification, arm: &Model, qdot: &[f64]) -> Vec<String> {
 
 /// [`lines`] under a heading that says what they mean and what to do (empty when none).
 pub fn report(ident: &Identification, arm: &Model, qdot: &[f64]) -> String {
-    let lines = lines(ident, arm, qdot);
-    if lines.is_empty() {
-        return String::new();
-    }
-    let mut text = String::from(
+    crate::training_range::under_heading(
         "faster than the identification's training speeds (over half again as fast: its friction \
-         extrapolates there; record motion that reaches these speeds and identify again):\n",
-    );
-    for line in lines {
-        text += &format!("  {line}\n");
-    }
-    text
+         extrapolates there; record motion that reaches these speeds and identify again):",
+        lines(ident, arm, qdot),
+    )
 }

@@ -114,6 +114,41 @@ impl Files {
     fn path(&self, name: &str) -> String {
         self._dir.path().join(name).to_str().unwrap().to_string()
     }
+
+    /// `admittance evaluate` of `data` with the 10 Hz identification.
+    fn evaluate(&self, data: &str) -> String {
+        ok(&[
+            "evaluate",
+            "--data",
+            data,
+            "--urdf",
+            &self.urdf,
+            "--identification",
+            &self.ident10,
+        ])
+    }
+
+    /// `admittance calibrate-contact` on `data` with the 10 Hz identification.
+    fn calibrate(&self, data: &str) -> String {
+        ok(&[
+            "calibrate-contact",
+            data,
+            "--identification",
+            &self.ident10,
+            "--out",
+            &self.path("floor.json"),
+        ])
+    }
+}
+
+/// The indented lines of `printed` below the line starting with `heading`.
+fn listed_under<'a>(printed: &'a str, heading: &str) -> Vec<&'a str> {
+    printed
+        .lines()
+        .skip_while(|l| !l.starts_with(heading))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .collect()
 }
 
 #[test]
@@ -331,17 +366,7 @@ fn a_network_of_another_arm_is_refused() {
 #[test]
 fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
     let f = files();
-    let eval = |data: &str| {
-        ok(&[
-            "evaluate",
-            "--data",
-            data,
-            "--urdf",
-            &f.urdf,
-            "--identification",
-            &f.ident10,
-        ])
-    };
+    let eval = |data: &str| f.evaluate(data);
     let heading = "outside the identification's training range";
     // The training recording itself stays inside.
     let inside = eval(&f.train);
@@ -361,12 +386,7 @@ fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
     std::fs::write(&path, shifted).unwrap();
     let outside = eval(&path);
     assert!(outside.contains(heading), "{outside}");
-    let listed: Vec<&str> = outside
-        .lines()
-        .skip_while(|l| !l.starts_with(heading))
-        .skip(1)
-        .take_while(|l| l.starts_with("  "))
-        .collect();
+    let listed = listed_under(&outside, heading);
     assert_eq!(listed.len(), 1, "{outside}");
     assert!(listed[0].starts_with("  left_s0: "), "{outside}");
     // About 0.5 rad beyond (the conditioning's edges aside).
@@ -381,16 +401,7 @@ fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
         .unwrap();
     assert!((beyond - 0.5).abs() < 0.05, "{outside}");
     // A contact floor calibrated there is warned about, naming the file and the joint.
-    let calibrate = |data: &str| {
-        ok(&[
-            "calibrate-contact",
-            data,
-            "--identification",
-            &f.ident10,
-            "--out",
-            &f.path("floor.json"),
-        ])
-    };
+    let calibrate = |data: &str| f.calibrate(data);
     let warning = "outside the identification's training range";
     assert!(!calibrate(&f.train).contains(warning));
     let warned = calibrate(&path);
@@ -405,17 +416,7 @@ fn evaluate_and_calibrate_name_the_joints_that_leave_the_training_range() {
 #[test]
 fn evaluate_names_the_joints_that_move_faster_than_trained() {
     let f = files();
-    let eval = |data: &str| {
-        ok(&[
-            "evaluate",
-            "--data",
-            data,
-            "--urdf",
-            &f.urdf,
-            "--identification",
-            &f.ident10,
-        ])
-    };
+    let eval = |data: &str| f.evaluate(data);
     let heading = "faster than the identification's training speeds";
     // The training recording itself stays within them.
     let within = eval(&f.train);
@@ -430,12 +431,7 @@ fn evaluate_names_the_joints_that_move_faster_than_trained() {
         !printed.contains("outside the identification's training range"),
         "{printed}"
     );
-    let listed: Vec<&str> = printed
-        .lines()
-        .skip_while(|l| !l.starts_with(heading))
-        .skip(1)
-        .take_while(|l| l.starts_with("  "))
-        .collect();
+    let listed = listed_under(&printed, heading);
     assert_eq!(listed.len(), 7, "{printed}");
     // Each joint's fastest sample about twice its training speed.
     for line in listed {
@@ -447,16 +443,7 @@ fn evaluate_names_the_joints_that_move_faster_than_trained() {
         assert!((ratio - 2.0).abs() < 0.15, "{line}");
     }
     // A contact floor calibrated there is warned about, naming the file and each joint.
-    let calibrate = |data: &str| {
-        ok(&[
-            "calibrate-contact",
-            data,
-            "--identification",
-            &f.ident10,
-            "--out",
-            &f.path("floor.json"),
-        ])
-    };
+    let calibrate = |data: &str| f.calibrate(data);
     let warning = "faster than the identification's training speeds";
     assert!(!calibrate(&f.train).contains(warning));
     let warned = calibrate(&path);
