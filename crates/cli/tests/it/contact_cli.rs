@@ -67,38 +67,49 @@ fn identified(dir: &Path) -> PathBuf {
     ident
 }
 
+/// `admittance calibrate-contact` on `recordings` with the identification `ident`, to `out`.
+fn calibrate(recordings: &[&Path], ident: &Path, out: &Path) -> Output {
+    let mut args = vec!["calibrate-contact"];
+    args.extend(recordings.iter().map(|p| p.to_str().unwrap()));
+    args.extend([
+        "--identification",
+        ident.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    admittance(&args)
+}
+
+/// `admittance evaluate` of `data` (the Baxter arm) with the identification `ident` and the
+/// contact floor `floor`.
+fn evaluate_with_floor(data: &Path, ident: &Path, floor: &Path) -> Output {
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    admittance(&[
+        "evaluate",
+        "--data",
+        data.to_str().unwrap(),
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--identification",
+        ident.to_str().unwrap(),
+        "--contact-floor",
+        floor.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
     let dir = tempfile::tempdir().unwrap();
-    let urdf = root().join("models/baxter_left_arm.urdf");
     let ident = identified(dir.path());
     let held_out = free_motion_csv(dir.path(), 1.9, 120.0);
     let other = free_motion_csv(dir.path(), 2.7, 120.0);
-    let s = |p: &Path| p.to_str().unwrap().to_string();
     let floor = dir.path().join("floor.json");
-    let o = admittance(&[
-        "calibrate-contact",
-        &s(&held_out),
-        "--identification",
-        &s(&ident),
-        "--out",
-        &s(&floor),
-    ]);
+    let o = calibrate(&[&held_out], &ident, &floor);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("guarantee"), "{}", text(&o));
     let written = std::fs::read_to_string(&floor).unwrap();
     assert!(written.contains("\"format\": \"admittance-contact-floor\""));
-    let o = admittance(&[
-        "evaluate",
-        "--data",
-        &s(&other),
-        "--urdf",
-        &s(&urdf),
-        "--identification",
-        &s(&ident),
-        "--contact-floor",
-        &s(&floor),
-    ]);
+    let o = evaluate_with_floor(&other, &ident, &floor);
     assert!(o.status.success(), "{}", text(&o));
     let table = text(&o);
     let events: usize = table
@@ -111,14 +122,7 @@ fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
     // A file that is not a floor is not overwritten.
     let mine = dir.path().join("mine.json");
     std::fs::write(&mine, "{}").unwrap();
-    let o = admittance(&[
-        "calibrate-contact",
-        &s(&held_out),
-        "--identification",
-        &s(&ident),
-        "--out",
-        &s(&mine),
-    ]);
+    let o = calibrate(&[&held_out], &ident, &mine);
     assert!(!o.status.success());
     assert!(text(&o).contains("not overwritten"), "{}", text(&o));
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "{}");
@@ -130,35 +134,16 @@ fn a_floor_from_held_out_motion_is_quiet_on_other_motion() {
 #[test]
 fn false_alarms_are_attributed_to_motion_faster_than_trained() {
     let dir = tempfile::tempdir().unwrap();
-    let urdf = root().join("models/baxter_left_arm.urdf");
     let ident = identified(dir.path());
     let held_out = free_motion_csv(dir.path(), 1.9, 60.0);
     let other = free_motion_csv(dir.path(), 2.7, 30.0);
     let faster = dir.path().join("faster.csv");
     crate::free_motion::played_faster(&other, &faster, 3.0);
-    let s = |p: &Path| p.to_str().unwrap().to_string();
     let floor = dir.path().join("floor.json");
-    let o = admittance(&[
-        "calibrate-contact",
-        &s(&held_out),
-        "--identification",
-        &s(&ident),
-        "--out",
-        &s(&floor),
-    ]);
+    let o = calibrate(&[&held_out], &ident, &floor);
     assert!(o.status.success(), "{}", text(&o));
     let counts = |data: &Path| {
-        let o = admittance(&[
-            "evaluate",
-            "--data",
-            &s(data),
-            "--urdf",
-            &s(&urdf),
-            "--identification",
-            &s(&ident),
-            "--contact-floor",
-            &s(&floor),
-        ]);
+        let o = evaluate_with_floor(data, &ident, &floor);
         assert!(o.status.success(), "{}", text(&o));
         let table = text(&o);
         let line = table
@@ -195,17 +180,8 @@ fn several_recordings_make_one_floor() {
     let ident = identified(dir.path());
     let first = free_motion_csv(dir.path(), 1.9, 40.0);
     let second = free_motion_csv(dir.path(), 2.7, 40.0);
-    let s = |p: &Path| p.to_str().unwrap().to_string();
     let floor = dir.path().join("floor.json");
-    let o = admittance(&[
-        "calibrate-contact",
-        &s(&first),
-        &s(&second),
-        "--identification",
-        &s(&ident),
-        "--out",
-        &s(&floor),
-    ]);
+    let o = calibrate(&[&first, &second], &ident, &floor);
     assert!(o.status.success(), "{}", text(&o));
     let f = admittance_control::ContactFloor::load(&floor).unwrap();
     assert_eq!(f.source["recordings"], 2);
@@ -221,15 +197,7 @@ fn several_recordings_make_one_floor() {
     let other = dir.path().join("other.csv");
     let mine = std::fs::read_to_string(&second).unwrap();
     std::fs::write(&other, mine.replacen("left_s0", "right_s0", 1)).unwrap();
-    let o = admittance(&[
-        "calibrate-contact",
-        &s(&first),
-        &s(&other),
-        "--identification",
-        &s(&ident),
-        "--out",
-        &s(&dir.path().join("refused.json")),
-    ]);
+    let o = calibrate(&[&first, &other], &ident, &dir.path().join("refused.json"));
     assert!(!o.status.success());
     assert!(text(&o).contains("other.csv"), "{}", text(&o));
     assert!(!dir.path().join("refused.json").exists());
