@@ -358,10 +358,15 @@ fn report(arm: &Model, ident: &Identification, seconds: f64, out: &Path) -> Stri
         );
     }
     text = format!(
-        "signals: input filter {}, torque delay {}, acceleration gain {}, estimate's 90 % step response {:.0} ms\n{text}",
+        "signals: input filter {}, torque delay {}, acceleration gain {}{}, estimate's 90 % step response {:.0} ms\n{text}",
         filter_name(s.input_filter_hz),
         delay_text(&s.delay_s),
         s.acceleration_gain,
+        if s.fit_acceleration_hz > 0.0 {
+            format!(" (fitted on q'' low-passed at {} Hz, zero phase)", s.fit_acceleration_hz)
+        } else {
+            String::new()
+        },
         1e3 * s.step_response_s
     );
     let total = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();

@@ -58,7 +58,7 @@ pub use identification::{
     outside_training_range, BaseParameters, Excitation, ExcitationSettings, FourierSeries,
     Identification, IdentificationFile, IdentificationSettings, IdentificationSummary, JointTerms,
     LimitUse, RangeExcursion, Samples, SpeedExcursion, COULOMB_WIDTH_CANDIDATES,
-    DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT,
+    DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT, FIT_ACCELERATION_HZ,
     IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION, TRAINING_RANGE_MARGIN,
     TRAINING_SPEED_MARGIN,
 };

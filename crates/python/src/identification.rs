@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use admittance_dynamics::{
     excitation as rust_excitation, Data, ExcitationSettings, Identification,
-    IdentificationSettings, Model, Samples,
+    IdentificationSettings, Model, Samples, FIT_ACCELERATION_HZ,
 };
 use numpy::PyArray2;
 use pyo3::prelude::*;
@@ -130,8 +130,11 @@ fn recording(data: &Bound<'_, PyAny>, arg: &str, model: &Model) -> PyResult<Free
 /// there. `coulomb_width` is the narrower smooth sign's width `w` of the friction,
 /// `tanh(qdot / w)` (rad/s, `admittance identify --coulomb-width`); `None` (default): chosen
 /// on held-out motion among `COULOMB_WIDTH_CANDIDATES` (each joint's terms carry it).
+/// `fit_acceleration_hz`: the zero-phase low-pass on the acceleration the fit regresses on
+/// (`FIT_ACCELERATION_HZ`, at least twice the conditioning's cut-off; predictions use the
+/// acceleration as measured); `None`: as measured, for exact accelerations (a simulation's).
 #[pyfunction]
-#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0), coulomb_width=None))]
+#[pyo3(signature = (data, m, friction=true, validation=None, input_filter_hz=None, springs=true, max_mass_ratio=Some(2.0), coulomb_width=None, fit_acceleration_hz=Some(FIT_ACCELERATION_HZ)))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -143,6 +146,7 @@ pub fn identify(
     springs: bool,
     max_mass_ratio: Option<f64>,
     coulomb_width: Option<f64>,
+    fit_acceleration_hz: Option<f64>,
 ) -> PyResult<PyIdentification> {
     if let Some(f) = input_filter_hz {
         if !(f.is_finite() && f >= 0.0) {
@@ -162,6 +166,7 @@ pub fn identify(
         springs: friction && springs,
         max_mass_ratio,
         coulomb_width,
+        fit_acceleration_hz,
         ..Default::default()
     };
     settings

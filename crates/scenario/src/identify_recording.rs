@@ -16,6 +16,10 @@ use crate::free_motion::{observer_training_arrays, FreeMotionData};
 /// slower than 4 Hz: a slower filter hides contact for longer than it saves false torque.
 pub const CUTOFF_CANDIDATES_HZ: [f64; 4] = [4.0, 6.0, 10.0, 0.0];
 
+/// How far above the input conditioning's cut-off the fit's acceleration low-pass stays at
+/// least (`IdentificationSettings::fit_acceleration_hz` is raised to it).
+const FIT_ACCELERATION_ABOVE_CONDITIONING: f64 = 2.0;
+
 /// A recording's samples through the input conditioning at one cut-off.
 pub struct ConditionedSamples {
     /// Conditioned angles, row-major (n per sample).
@@ -225,7 +229,7 @@ pub fn identify_recording(
     };
     if repeats.is_some() {
         settings.springs = false;
-        settings.sample_rate_hz = None;
+        settings.delay = false;
         // Nor can they tell ridges apart: on the ten simulated arms the held-out error of the
         // weakest and the strongest ridge differed by 4 % or less, while on new motion the
         // strongest was better on 19 of 20 (arm, motion) pairs and 2.7 % worse on one (the
@@ -246,6 +250,14 @@ pub fn identify_recording(
                     .map_err(|e| format!("input filter {cutoff} Hz, validation: {e}"))?,
             ),
             None => None,
+        };
+        // The fit's acceleration low-pass stays above the band the conditioning keeps: the
+        // conditioned torque carries inertial torque up to its cut-off.
+        let settings = IdentificationSettings {
+            fit_acceleration_hz: settings
+                .fit_acceleration_hz
+                .map(|hz| hz.max(FIT_ACCELERATION_ABOVE_CONDITIONING * cutoff)),
+            ..settings.clone()
         };
         Ok(identify(
             arm,

@@ -538,3 +538,38 @@ fn an_angle_read_within_one_turn_is_identified_as_the_same_motion() {
         }
     }
 }
+
+/// The fit regresses on the acceleration through a zero-phase low-pass, 10 Hz on raw signals
+/// and twice the conditioning's cut-off above 5 Hz; the file records it and `identify` says
+/// so beside the acceleration gain.
+#[test]
+fn the_fits_acceleration_low_pass_is_recorded() {
+    let Some(data) = baxter_recording() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let urdf = root().join("models/baxter_left_arm.urdf");
+    for (cutoff, want) in [("0", 10.0), ("10", 20.0)] {
+        let out = tmp.path().join(format!("{cutoff}.json"));
+        let r = admittance(&[
+            "identify",
+            "--data",
+            data.to_str().unwrap(),
+            "--urdf",
+            urdf.to_str().unwrap(),
+            "--until",
+            "30",
+            "--input-filter-hz",
+            cutoff,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", text(&r));
+        let file: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let recorded = file["payload"]["summary"]["fit_acceleration_hz"].as_f64();
+        assert_eq!(recorded, Some(want), "input filter {cutoff} Hz");
+        let line = format!("fitted on q'' low-passed at {want} Hz, zero phase");
+        assert!(text(&r).contains(&line), "{}", text(&r));
+    }
+}

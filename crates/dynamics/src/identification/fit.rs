@@ -8,6 +8,7 @@ use crate::algorithms::regressor::{inertial_parameters, PARAMETERS_PER_BODY};
 use crate::error::DynamicsError;
 use crate::identification::base::BaseParameters;
 use crate::identification::constrained::BodyExtent;
+use crate::identification::fit_acceleration::smoothed_acceleration;
 use crate::identification::held_out::{
     best_of, errors_by_gain, held_sums, median_ratio, Fitter, Held, HeldSums, Signals,
 };
@@ -108,8 +109,27 @@ pub fn identify(
     prior
         .rows_mut(0, PARAMETERS_PER_BODY * n)
         .copy_from_slice(&inertial_parameters(model));
-    let shifts = shift_grid(settings.sample_rate_hz);
-    let sums = held_sums(model, train, validation, settings, &shifts, &widths)?;
+    let shifts = shift_grid(settings.sample_rate_hz.filter(|_| settings.delay));
+    // The fit regresses on a smoothed acceleration (`fit_acceleration.rs`); everything
+    // scored uses the acceleration as measured.
+    let smoothed = |s: &Samples| match (settings.sample_rate_hz, settings.fit_acceleration_hz) {
+        (Some(rate), Some(hz)) => smoothed_acceleration(s, rate, hz),
+        _ => None,
+    };
+    let train_acceleration = smoothed(train);
+    let validation_acceleration = validation.and_then(smoothed);
+    let fit_train = fitted_on(train, &train_acceleration);
+    let fit_validation = validation.map(|v| (fitted_on(v, &validation_acceleration), *v));
+    let sums = held_sums(
+        model,
+        &fit_train,
+        fit_validation
+            .as_ref()
+            .map(|(fitted, scored)| (fitted, scored)),
+        settings,
+        &shifts,
+        &widths,
+    )?;
     let mut active: Vec<bool> = (0..p)
         .map(|c| c < PARAMETERS_PER_BODY * n || settings.friction)
         .collect();
@@ -263,6 +283,10 @@ pub fn identify(
             .iter()
             .map(|&s| settings.sample_rate_hz.map_or(0.0, |rate| shifts[s] / rate))
             .collect(),
+        fit_acceleration_hz: match train_acceleration {
+            Some(_) => settings.fit_acceleration_hz.unwrap_or(0.0),
+            None => 0.0,
+        },
         step_response_s: 0.0,
         acceleration_gain,
         prior_scale,
@@ -273,6 +297,14 @@ pub fn identify(
         summary,
         ..identified
     })
+}
+
+/// `samples` with the fit's acceleration in place of the measured one, when there is one.
+fn fitted_on<'a>(samples: &Samples<'a>, acceleration: &'a Option<Vec<f64>>) -> Samples<'a> {
+    Samples {
+        qddot: acceleration.as_deref().unwrap_or(samples.qddot),
+        ..*samples
+    }
 }
 
 /// Enough training (and validation) samples for `n` joints.

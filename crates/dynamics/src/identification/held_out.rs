@@ -176,10 +176,12 @@ impl<'a> HeldSums<'a> {
 }
 
 /// One pass over the samples (per joint and stretch, in parallel) for [`HeldSums`].
+/// `validation`: the recording whose sums score settings and the same recording as the
+/// predictions of `errors_by_gain` see it (its acceleration as measured).
 pub(super) fn held_sums<'a>(
     model: &Model,
     train: &Samples,
-    validation: Option<&Samples<'a>>,
+    validation: Option<(&Samples, &Samples<'a>)>,
     settings: &IdentificationSettings,
     shifts: &[f64],
     widths: &[f64],
@@ -204,9 +206,9 @@ pub(super) fn held_sums<'a>(
     // A validation recording is scored as the fitted springs will be used: beyond the
     // training motion's range, where that is less than half a turn, they continue linearly.
     let validation = match validation {
-        Some(v) => {
+        Some((fitted, scored)) => {
             let springs = spring_ranges(model, &training_range(train));
-            Some((stretches(v, 1, &springs)?.remove(0), *v))
+            Some((stretches(fitted, 1, &springs)?.remove(0), *scored))
         }
         None => None,
     };

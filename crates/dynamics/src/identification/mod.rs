@@ -22,6 +22,7 @@ mod excitation;
 mod excitation_settings;
 mod file;
 mod fit;
+mod fit_acceleration;
 mod held_out;
 mod joint_terms;
 mod normal;
@@ -43,6 +44,7 @@ pub use excitation::{
 };
 pub use file::{IdentificationFile, IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION};
 pub use fit::identify;
+pub use fit_acceleration::FIT_ACCELERATION_HZ;
 pub use joint_terms::JointTerms;
 pub use payload::identify_payload;
 pub use samples::Samples;
@@ -62,6 +64,7 @@ use crate::algorithms::rnea::{rnea, rnea_pass_at_placements};
 use crate::data::Data;
 use crate::error::{check_len, DimensionError, DynamicsError};
 use crate::model::Model;
+use settings::is_zero;
 
 /// An identified arm: its rigid-body model (the URDF's kinematics with identified
 /// inertias) and each joint's terms. `tau = RNEA(q, q', q'') + tau_joint(q, q', q'')`.
@@ -155,6 +158,11 @@ pub struct IdentificationSummary {
     /// ([`Identification::speed_excursions`]) and the run-time loop flags each such step.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub training_speed: Vec<f64>,
+    /// The cut-off (Hz) of the zero-phase low-pass on the acceleration the fit regressed the
+    /// inertial torque on (`IdentificationSettings::fit_acceleration_hz`); 0: as measured
+    /// (and in files written before it existed).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub fit_acceleration_hz: f64,
 }
 
 fn unit_gain() -> f64 {
@@ -364,6 +372,7 @@ impl IdentificationSummary {
             prior_scale: 1.0,
             training_range: Vec::new(),
             training_speed: Vec::new(),
+            fit_acceleration_hz: 0.0,
         }
     }
 }

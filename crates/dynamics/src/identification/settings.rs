@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::DynamicsError;
+use crate::identification::fit_acceleration::FIT_ACCELERATION_HZ;
 
 /// The Coulomb widths (rad/s) `identify` chooses among when none is given; the first is
 /// the reference that another must beat on held-out motion (and the width of a model
@@ -53,8 +54,21 @@ pub struct IdentificationSettings {
     pub acceleration_gain: Option<f64>,
     /// The samples' rate (Hz). When given, one delay of the torques behind the motion (up to
     /// 30 ms or 2 samples either way, at most 25 candidates) is chosen on held-out motion
-    /// and stored as `delay_s`; `None` (default): no delay.
+    /// and stored as `delay_s` (unless `delay` is false), and the fit's acceleration is
+    /// smoothed (`fit_acceleration_hz`); `None` (default): neither.
     pub sample_rate_hz: Option<f64>,
+    /// Offer a delay of the torques behind the motion (needs `sample_rate_hz`). Default true;
+    /// false where held-out stretches cannot judge one (a recording whose motion repeats).
+    /// Not written to files: `summary.delay_s` and `summary.held_out` say what was done.
+    #[serde(skip)]
+    pub delay: bool,
+    /// Zero-phase low-pass (Hz) on the measured acceleration that the fit regresses the
+    /// inertial torque on (needs `sample_rate_hz`; predictions, the acceleration gain and the
+    /// held-out errors use the acceleration as measured); `None`: the fit uses it as
+    /// measured too. Default [`FIT_ACCELERATION_HZ`]. Not written to files:
+    /// `summary.fit_acceleration_hz` records the cut-off applied.
+    #[serde(skip)]
+    pub fit_acceleration_hz: Option<f64>,
 }
 
 impl Default for IdentificationSettings {
@@ -70,6 +84,8 @@ impl Default for IdentificationSettings {
             max_mass_ratio: Some(2.0),
             acceleration_gain: None,
             sample_rate_hz: None,
+            delay: true,
+            fit_acceleration_hz: Some(FIT_ACCELERATION_HZ),
         }
     }
 }
@@ -140,6 +156,14 @@ impl IdentificationSettings {
                 );
             }
         }
+        if let Some(f) = self.fit_acceleration_hz {
+            if !(f.is_finite() && f > 0.0) {
+                return bad(
+                    "fit_acceleration_hz",
+                    format!("is {f}, must be a positive number of Hz (or absent: as measured)"),
+                );
+            }
+        }
         if self.springs && !self.friction {
             return bad(
                 "springs",
@@ -157,7 +181,7 @@ fn no_bound() -> Option<f64> {
 
 /// Whether a setting is at its default of 0 (left out of the files, so that files written
 /// before the setting existed read back the same).
-fn is_zero(x: &f64) -> bool {
+pub(super) fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
 

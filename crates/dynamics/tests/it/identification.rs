@@ -593,3 +593,63 @@ fn a_late_torque_signal_is_found_and_none_where_there_is_none() {
         );
     }
 }
+
+/// A recorded acceleration carrying differentiation noise several times the motion's own
+/// (as a 100 Hz recording's second difference does): regressed on as measured, the noise
+/// biases the physical fit's gravity and friction; the fit's zero-phase smoothed acceleration
+/// (`fit_acceleration_hz`, the default) keeps them. Judged on new motion through the torque
+/// at zero acceleration, which the acceleration gain does not touch.
+#[test]
+fn a_noisy_acceleration_does_not_bias_the_fit() {
+    let urdf = common::baxter();
+    let truth = urdf
+        .with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
+        .unwrap();
+    let terms = truth_terms(7);
+    let (q, qd, qdd) = motion(&urdf, 0.3, 40.0);
+    let tau = torques(&truth, &terms, &q, &qd, &qdd);
+    // Uniform pseudo-noise of +-5 rad/s^2 on every recorded acceleration.
+    let noisy: Vec<f64> = qdd
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let uniform = ((k as f64 * 12.9898).sin() * 43758.5453).rem_euclid(1.0);
+            a + 5.0 * (2.0 * uniform - 1.0)
+        })
+        .collect();
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &noisy,
+        tau: &tau,
+        dof: 7,
+    };
+    let (q2, qd2, _) = motion(&urdf, 0.7, 20.0);
+    let zero = vec![0.0; q2.len()];
+    let want = torques(&truth, &terms, &q2, &qd2, &zero);
+    let error = |fit_acceleration_hz: Option<f64>| {
+        let settings = IdentificationSettings {
+            sample_rate_hz: Some(200.0),
+            fit_acceleration_hz,
+            ..Default::default()
+        };
+        let ident = identify(&urdf, &train, None, &settings).unwrap();
+        let mut data = Data::new(&urdf);
+        let mut got = vec![0.0; q2.len()];
+        for (k, out) in got.chunks_exact_mut(7).enumerate() {
+            let r = 7 * k..7 * (k + 1);
+            ident
+                .predict(&mut data, &q2[r.clone()], &qd2[r.clone()], &zero[r], out)
+                .unwrap();
+        }
+        (rms(&got, &want), ident.summary.fit_acceleration_hz)
+    };
+    let (smoothed, hz) = error(IdentificationSettings::default().fit_acceleration_hz);
+    let (as_measured, none) = error(None);
+    assert_eq!((hz, none), (FIT_ACCELERATION_HZ, 0.0));
+    eprintln!("torque at zero acceleration on new motion: {smoothed:.3} N m smoothed, {as_measured:.3} as measured");
+    assert!(
+        smoothed < 0.5 * as_measured,
+        "smoothed {smoothed:.3} N m against {as_measured:.3} as measured"
+    );
+}

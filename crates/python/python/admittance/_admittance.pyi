@@ -26,6 +26,9 @@ TRAINING_RANGE_MARGIN: float
 #: How far beyond a joint's highest training speed (a share of it) a speed counts as faster
 #: than trained (``Identification.speed_excursions``, the loop's ``faster_than_training``).
 TRAINING_SPEED_MARGIN: float
+#: The zero-phase low-pass (Hz) on the acceleration ``identify`` regresses the inertial
+#: torque on when none is given (at least twice the input conditioning's cut-off).
+FIT_ACCELERATION_HZ: float
 Vector = npt.Vector
 Matrix = npt.Vector
 StrPath = Union[str, "PathLike[str]"]
@@ -706,12 +709,15 @@ def identify(
     springs: bool = True,
     max_mass_ratio: Optional[float] = 2.0,
     coulomb_width: Optional[float] = None,
+    fit_acceleration_hz: Optional[float] = 10.0,
 ) -> Identification:
     """Identifies the arm from free motion (``admittance identify``): settings chosen on
     ``validation`` or by blocked cross-validation over contiguous stretches; each body's mass
     at most ``max_mass_ratio`` times the URDF's (``None``: no bound); ``coulomb_width``: the
     friction's narrower smooth sign ``tanh(qdot / w)`` (rad/s; ``None``: chosen on held-out
-    motion among ``COULOMB_WIDTH_CANDIDATES``). Releases the GIL."""
+    motion among ``COULOMB_WIDTH_CANDIDATES``); ``fit_acceleration_hz``: the zero-phase
+    low-pass on the acceleration the fit regresses on (``None``: as measured, for exact
+    accelerations). Releases the GIL."""
 
 def excitation(
     m: Model,
