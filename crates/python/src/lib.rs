@@ -49,7 +49,10 @@ fn _admittance(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "COULOMB_WIDTH_CANDIDATES",
         admittance_dynamics::COULOMB_WIDTH_CANDIDATES.to_vec(),
     )?;
-    m.add("FIT_ACCELERATION_HZ", admittance_dynamics::FIT_ACCELERATION_HZ)?;
+    m.add(
+        "FIT_ACCELERATION_HZ",
+        admittance_dynamics::FIT_ACCELERATION_HZ,
+    )?;
     m.add(
         "TRAINING_RANGE_MARGIN",
         admittance_dynamics::TRAINING_RANGE_MARGIN,

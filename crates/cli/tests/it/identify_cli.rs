@@ -157,6 +157,17 @@ pub(crate) fn identify_baxter(
     extra: &[&str],
     out: &Path,
 ) -> (String, serde_json::Value) {
+    identify_baxter_at(data, until, "4", extra, out)
+}
+
+/// [`identify_baxter`] with the input filter's cut-off `input_filter_hz` (Hz; "0": raw).
+pub(crate) fn identify_baxter_at(
+    data: &Path,
+    until: &str,
+    input_filter_hz: &str,
+    extra: &[&str],
+    out: &Path,
+) -> (String, serde_json::Value) {
     let urdf = root().join("models/baxter_left_arm.urdf");
     let mut args = vec![
         "identify",
@@ -167,7 +178,7 @@ pub(crate) fn identify_baxter(
         "--until",
         until,
         "--input-filter-hz",
-        "4",
+        input_filter_hz,
         "--out",
         out.to_str().unwrap(),
     ];
@@ -548,28 +559,12 @@ fn the_fits_acceleration_low_pass_is_recorded() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let urdf = root().join("models/baxter_left_arm.urdf");
     for (cutoff, want) in [("0", 10.0), ("10", 20.0)] {
         let out = tmp.path().join(format!("{cutoff}.json"));
-        let r = admittance(&[
-            "identify",
-            "--data",
-            data.to_str().unwrap(),
-            "--urdf",
-            urdf.to_str().unwrap(),
-            "--until",
-            "30",
-            "--input-filter-hz",
-            cutoff,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(r.status.success(), "{}", text(&r));
-        let file: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let (printed, file) = identify_baxter_at(&data, "30", cutoff, &[], &out);
         let recorded = file["payload"]["summary"]["fit_acceleration_hz"].as_f64();
         assert_eq!(recorded, Some(want), "input filter {cutoff} Hz");
         let line = format!("fitted on q'' low-passed at {want} Hz, zero phase");
-        assert!(text(&r).contains(&line), "{}", text(&r));
+        assert!(printed.contains(&line), "{printed}");
     }
 }
