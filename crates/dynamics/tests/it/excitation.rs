@@ -309,9 +309,7 @@ fn torques(model: &Model, terms: &[JointTerms], e: &Excitation) -> Vec<f64> {
 #[test]
 fn identification_on_an_excitation_recovers_the_arm_on_other_motion() {
     let urdf = common::baxter();
-    let truth = urdf
-        .with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
-        .unwrap();
+    let truth = crate::identification::heavier_baxter(&urdf);
     let terms: Vec<JointTerms> = (0..7)
         .map(|i| JointTerms {
             armature: 0.05,

@@ -41,6 +41,13 @@ pub(crate) fn motion(model: &Model, seed: f64, seconds: f64) -> (Vec<f64>, Vec<f
     (q, qd, qdd)
 }
 
+/// The Baxter the identification tests record: the URDF's arm with heavier and lighter links
+/// than the URDF says.
+pub(crate) fn heavier_baxter(urdf: &Model) -> Model {
+    urdf.with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
+        .unwrap()
+}
+
 fn truth_terms(n: usize) -> Vec<JointTerms> {
     (0..n)
         .map(|i| JointTerms {
@@ -94,9 +101,7 @@ fn rms(a: &[f64], b: &[f64]) -> f64 {
 fn recovers_an_arm_on_motion_it_never_saw() {
     let urdf = common::baxter();
     // The truth: heavier links than the URDF says, and friction, springs, rotor inertia.
-    let truth = urdf
-        .with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
-        .unwrap();
+    let truth = heavier_baxter(&urdf);
     let terms = truth_terms(7);
     let (q, qd, qdd) = motion(&urdf, 0.3, 30.0);
     let tau = torques(&truth, &terms, &q, &qd, &qdd);
@@ -602,9 +607,7 @@ fn a_late_torque_signal_is_found_and_none_where_there_is_none() {
 #[test]
 fn a_noisy_acceleration_does_not_bias_the_fit() {
     let urdf = common::baxter();
-    let truth = urdf
-        .with_body_scales(&[1.3, 0.8, 1.2, 1.1, 0.9, 1.25, 1.1])
-        .unwrap();
+    let truth = heavier_baxter(&urdf);
     let terms = truth_terms(7);
     let (q, qd, qdd) = motion(&urdf, 0.3, 40.0);
     let tau = torques(&truth, &terms, &q, &qd, &qdd);
