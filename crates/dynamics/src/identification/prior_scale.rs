@@ -59,42 +59,20 @@ pub(super) fn prior_scale(
     if urdf.bias.len() != urdf.total.len() || urdf.total.len() != len * n {
         return Ok(None);
     }
-    // Per stretch: the normal equations and the torque's squares.
-    let mut parts = vec![(DMatrix::<f64>::zeros(m, m), DVector::<f64>::zeros(m), 0.0); STRETCHES];
-    let mut row = vec![0.0; 2 + JOINT_FEATURES];
-    let mut f = [0.0; JOINT_FEATURES];
-    for k in 0..len {
-        let (gram, rhs, tau_sq) = &mut parts[(k * STRETCHES / len.max(1)).min(STRETCHES - 1)];
-        let r = k * n..(k + 1) * n;
-        let (q, qd, qdd) = (
-            &samples.q[r.clone()],
-            &samples.qdot[r.clone()],
-            &samples.qddot[r.clone()],
-        );
-        let (bias, total) = (&urdf.bias[r.clone()], &urdf.total[r]);
-        for i in 0..n {
-            features(q[i], qd[i], qdd[i], width, None, &mut f);
-            row[0] = bias[i];
-            row[1] = total[i] - bias[i];
-            row[2..].copy_from_slice(&f);
-            // Columns of this row: 0, 1 and joint i's features.
-            let col = |c: usize| {
-                if c < 2 {
-                    c
-                } else {
-                    2 + JOINT_FEATURES * i + c - 2
-                }
-            };
-            let tau = samples.tau[k * n + i];
-            *tau_sq += tau * tau;
-            for (a, &x) in row.iter().enumerate() {
-                rhs[col(a)] += x * tau;
-                for (b, &y) in row.iter().enumerate() {
-                    gram[(col(a), col(b))] += x * y;
-                }
-            }
-        }
-    }
+    // Per stretch, side by side: the normal equations and the torque's squares. Sample `k`
+    // is in stretch `k STRETCHES / len`.
+    let ranges: Vec<(usize, usize)> = (0..STRETCHES)
+        .map(|b| {
+            (
+                (b * len).div_ceil(STRETCHES),
+                ((b + 1) * len).div_ceil(STRETCHES),
+            )
+        })
+        .collect();
+    let parts: Vec<(DMatrix<f64>, DVector<f64>, f64)> =
+        crate::parallel::parallel_map(&ranges, |&(start, end)| {
+            stretch_sums(samples, urdf, width, n, start, end)
+        });
     let mut gram = DMatrix::<f64>::zeros(m, m);
     let mut rhs = DVector::<f64>::zeros(m);
     let mut tau_sq = 0.0;
@@ -129,6 +107,85 @@ pub(super) fn prior_scale(
         (SCALE_RANGE.contains(&s) && deviation > MIN_DEVIATION && deviation > T_95 * error)
             .then_some(s),
     )
+}
+
+/// Row `[h_i, (M q'')_i, features of joint i]` of every joint and sample of `start..end`:
+/// the normal equations over the columns `[h, M q'', JOINT_FEATURES per joint]` and the
+/// torque's squares. Each joint's rows touch the two shared columns and its own features
+/// only, so those blocks are summed per joint (each element over the same rows in the same
+/// order as a dense accumulation, and its lower triangle mirrored: the same values).
+fn stretch_sums(
+    samples: &Samples,
+    urdf: &UrdfTorques,
+    width: f64,
+    n: usize,
+    start: usize,
+    end: usize,
+) -> (DMatrix<f64>, DVector<f64>, f64) {
+    const ROW: usize = 2 + JOINT_FEATURES;
+    let mut shared = [[0.0; 2]; 2];
+    let mut shared_rhs = [0.0; 2];
+    let mut blocks = vec![[[0.0; ROW]; ROW]; n];
+    let mut block_rhs = vec![[0.0; ROW]; n];
+    let mut tau_sq = 0.0;
+    let mut row = [0.0; ROW];
+    let mut f = [0.0; JOINT_FEATURES];
+    for k in start..end {
+        let r = k * n..(k + 1) * n;
+        let (q, qd, qdd) = (
+            &samples.q[r.clone()],
+            &samples.qdot[r.clone()],
+            &samples.qddot[r.clone()],
+        );
+        let (bias, total) = (&urdf.bias[r.clone()], &urdf.total[r]);
+        for i in 0..n {
+            features(q[i], qd[i], qdd[i], width, None, &mut f);
+            row[0] = bias[i];
+            row[1] = total[i] - bias[i];
+            row[2..].copy_from_slice(&f);
+            let tau = samples.tau[k * n + i];
+            tau_sq += tau * tau;
+            for a in 0..2 {
+                shared_rhs[a] += row[a] * tau;
+                for b in 0..=a {
+                    shared[a][b] += row[a] * row[b];
+                }
+            }
+            let (block, rhs) = (&mut blocks[i], &mut block_rhs[i]);
+            for a in 2..ROW {
+                rhs[a] += row[a] * tau;
+                for b in 0..=a {
+                    block[a][b] += row[a] * row[b];
+                }
+            }
+        }
+    }
+    let m = 2 + JOINT_FEATURES * n;
+    let mut gram = DMatrix::<f64>::zeros(m, m);
+    let mut rhs = DVector::<f64>::zeros(m);
+    for a in 0..2 {
+        rhs[a] = shared_rhs[a];
+        for b in 0..=a {
+            gram[(a, b)] = shared[a][b];
+        }
+    }
+    for (i, (block, block_rhs)) in blocks.iter().zip(&block_rhs).enumerate() {
+        let col = |c: usize| {
+            if c < 2 {
+                c
+            } else {
+                2 + JOINT_FEATURES * i + c - 2
+            }
+        };
+        for a in 2..ROW {
+            rhs[col(a)] = block_rhs[a];
+            for b in 0..=a {
+                gram[(col(a), col(b))] = block[a][b];
+            }
+        }
+    }
+    gram.fill_upper_triangle_with_lower_triangle();
+    (gram, rhs, tau_sq)
 }
 
 /// The scale of the normal equations' first column, the others as nuisance (`None` when the
@@ -182,4 +239,79 @@ pub(super) fn scaled(prior: &DVector<f64>, scale: f64, bodies: usize) -> DVector
         .iter_mut()
         .for_each(|p| *p *= scale);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The per-joint blocks equal a dense accumulation of every row over every column, bit for
+    /// bit, and the stretches split the samples at `k STRETCHES / len`.
+    #[test]
+    fn stretch_sums_equal_the_dense_sums_bit_for_bit() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let model = Model::from_urdf_file(&root.join("../../models/franka_panda.urdf"), None, None)
+            .expect("model");
+        let n = model.nq();
+        let count = 53; // not a multiple of STRETCHES
+        let wave = |k: usize, f: f64| ((k as f64) * f).sin() * (1 + k % 4) as f64;
+        let q: Vec<f64> = (0..count * n).map(|k| wave(k, 0.37)).collect();
+        let qd: Vec<f64> = (0..count * n).map(|k| 0.1 * wave(k, 1.13)).collect();
+        let qdd: Vec<f64> = (0..count * n).map(|k| 3.0 * wave(k, 0.71)).collect();
+        let tau: Vec<f64> = (0..count * n).map(|k| 5.0 * wave(k, 0.29)).collect();
+        let samples = Samples {
+            q: &q,
+            qdot: &qd,
+            qddot: &qdd,
+            tau: &tau,
+            dof: n,
+        };
+        let urdf = UrdfTorques::new(&model, &samples, true);
+        let width = 0.005;
+        let m = 2 + JOINT_FEATURES * n;
+        let mut dense =
+            vec![(DMatrix::<f64>::zeros(m, m), DVector::<f64>::zeros(m), 0.0); STRETCHES];
+        let mut f = [0.0; JOINT_FEATURES];
+        for k in 0..count {
+            let (gram, rhs, tau_sq) = &mut dense[(k * STRETCHES / count).min(STRETCHES - 1)];
+            for i in 0..n {
+                let at = k * n + i;
+                features(q[at], qd[at], qdd[at], width, None, &mut f);
+                let mut row = vec![(0, urdf.bias[at]), (1, urdf.total[at] - urdf.bias[at])];
+                row.extend(
+                    f.iter()
+                        .enumerate()
+                        .map(|(c, &v)| (2 + JOINT_FEATURES * i + c, v)),
+                );
+                *tau_sq += tau[at] * tau[at];
+                for &(a, x) in &row {
+                    rhs[a] += x * tau[at];
+                    for &(b, y) in &row {
+                        gram[(a, b)] += x * y;
+                    }
+                }
+            }
+        }
+        let ranges: Vec<(usize, usize)> = (0..STRETCHES)
+            .map(|b| {
+                (
+                    (b * count).div_ceil(STRETCHES),
+                    ((b + 1) * count).div_ceil(STRETCHES),
+                )
+            })
+            .collect();
+        for (&(start, end), (gram, rhs, tau_sq)) in ranges.iter().zip(&dense) {
+            let (g, r, t) = stretch_sums(&samples, &urdf, width, n, start, end);
+            assert_eq!(t.to_bits(), tau_sq.to_bits());
+            assert!(g
+                .iter()
+                .zip(gram.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits()));
+            assert!(r
+                .iter()
+                .zip(rhs.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits()));
+            assert!(*tau_sq > 0.0);
+        }
+    }
 }
