@@ -23,7 +23,8 @@ package). Per recording and input cut-off (raw signals, 4 Hz, 10 Hz):
    then the geometric mean of the ratios (the bar: <= 0.9). With `--speed-flags`, also the share
    of scored rows where a joint moves faster than the identification's training speeds by more
    than `adm.TRAINING_SPEED_MARGIN` (what the run-time loop flags as faster_than_training) and
-   both fits' rms on those joints' samples and on the rest.
+   both fits' rms on those joints' samples and on the rest. Where the identification's
+   acceleration gain is below 1, also its rms predicting with the whole measured acceleration.
 
 Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.csv: the first
 120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
@@ -41,6 +42,9 @@ signal of another size than the URDF's arm (a torque constant or gear ratio off)
 `--drop-rows P` drops a random fraction P of the MuJoCo training recordings' rows (a logger
 that lost samples; the time column keeps the true times of the rows left); the scored
 recording stays whole, as a control loop's samples are.
+`--link-torque` records, instead of the commanded torque, what a joint torque sensor on the
+link side reads (`LinkTorqueSensor`: the rigid-body torque, a constant offset, white noise), as
+torque-controlled arms log it.
 """
 
 from __future__ import annotations
@@ -226,6 +230,10 @@ def compare(label, m, pmodel, train, scored, log):
         delays = list(ident.summary.get("delay_s") or [])
         tau_id = delay_torque(cs["tau"], delays, (len(t) - 1) / (t[-1] - t[0]))[w]
         project = rms(tau_id - np.asarray(ident.predict(q, qd, qdd)))
+        gain = summary_gain = ident.summary["acceleration_gain"]
+        # The same identification predicting with the whole measured acceleration (the gain
+        # chosen on the training motion weights it less).
+        full = project if gain == 1.0 else rms(tau_id - whole_acceleration_prediction(ident, q, qd, qdd))
         ls = LeastSquares(pmodel).fit(ct["q"], ct["qdot"], ct["qddot"], ct["tau"])
         baseline = rms(tau - ls.predict(q, qd, qdd))
         summary = ident.summary
@@ -242,6 +250,8 @@ def compare(label, m, pmodel, train, scored, log):
             "chosen_input_filter_hz": summary.get("input_filter_hz"),
             "delay_s": summary.get("delay_s"),
             "prior_scale": summary.get("prior_scale"),
+            "acceleration_gain": summary_gain,
+            "project_rms_whole_acceleration": full,
         }
         if faster is not None:
             point["faster_than_training"] = faster
@@ -250,9 +260,23 @@ def compare(label, m, pmodel, train, scored, log):
             f"  {'yes' if point['project_physical'] else 'NO':>8}  ({'yes' if point['least_squares_physical'] else 'no'})"
         )
         points.append(point)
+        if gain < 1.0:
+            log(f"    acceleration gain {gain:g}; with the whole acceleration {full:.3f} ({full / baseline:.3f} x least squares)")
         if faster is not None:
             log("    " + speed_flag_text(faster))
     return points
+
+
+def whole_acceleration_prediction(ident, q, qd, qdd):
+    """``ident.predict`` with the acceleration gain taken as 1: its prediction without the
+    acceleration plus the whole inertial torque (``M q''`` and the rotor inertias)."""
+    still = np.asarray(ident.predict(q, qd, np.zeros_like(qdd)))
+    gain = ident.summary["acceleration_gain"]
+    if gain > 0.0:
+        return still + (np.asarray(ident.predict(q, qd, qdd)) - still) / gain
+    rotor = np.array([t["armature"] for t in ident.joint_terms])
+    inertial = np.array([np.asarray(adm.crba(ident.model, a)) @ b for a, b in zip(q, qdd)])
+    return still + inertial + rotor * qdd
 
 
 def speed_flags(ident, qdot, error, baseline_error):
@@ -398,10 +422,36 @@ def drop_rows(data, fraction, seed):
     return {k: (np.asarray(v)[keep] if k in ("t", "q", "qdot", "qddot", "tau") else v) for k, v in data.items()}
 
 
-def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0, period=None):
+class LinkTorqueSensor:
+    """A joint torque sensor on the link side of each joint, as on torque-controlled arms
+    (Franka, KUKA LBR iiwa): it reads the torque the link receives, the URDF arm's rigid-body
+    torque of each step (``rnea`` at the state before it and the step's change of velocity),
+    not the motor's command (no friction, damping or rotor inertia in it), plus a constant
+    offset (the same in every recording of the arm: one sensor) and white noise, up to
+    ``OFFSET`` and ``NOISE`` (standard deviation) times the joint's effort limit (0.04 and
+    0.09 N m on the Panda's 87 N m joints)."""
+
+    NOISE = 1e-3
+    OFFSET = 5e-4
+
+    def __init__(self, m, dt, seed):
+        effort = np.where(np.isfinite(m.effort_limit) & (np.asarray(m.effort_limit) > 0), m.effort_limit, 87.0)
+        self.m, self.dt = m, dt
+        self.rng = np.random.default_rng(seed)
+        self.noise = self.NOISE * effort
+        self.offset = self.OFFSET * effort * np.random.default_rng(10).uniform(-1.0, 1.0, m.n)
+
+    def __call__(self, q, qdot, arm, tau):
+        acceleration = (arm.qdot() - qdot) / self.dt
+        rigid = np.asarray(adm.rnea(self.m, q, qdot, acceleration))
+        return rigid + self.offset + self.noise * self.rng.standard_normal(self.m.n)
+
+
+def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0, period=None, link_torque=False):
     """``period``: the training excitation's period in s (default: the arms table's, which
     repeats; the training duration: motion that does not repeat, so that the identification
-    offers springs and judges them on held-out stretches)."""
+    offers springs and judges them on held-out stretches). ``link_torque``: the recorded
+    torque is a link-side torque sensor's (:class:`LinkTorqueSensor`), not the command."""
     from admittance.mujoco import _arms
     from admittance.mujoco._plant import MujocoArm
 
@@ -419,8 +469,9 @@ def mujoco_arm(name, log, cfg, torque_scale=1.0, dropped=0.0, period=None):
     eval_motion, _ = _arms.excitation_motion(m, cfg.evaluation_duration, cfg.evaluation_seed, cfg.dt)
     gains = _arms.recording_gains(m, train_motion["q"].mean(axis=0), arm.terms)
     rng = np.random.default_rng(cfg.seed)
-    train, _, _ = _arms.record(arm, m, train_motion, gains, cfg, rng)
-    free, _, _ = _arms.record(arm, m, eval_motion, gains, cfg, rng)
+    sensor = (lambda seed: LinkTorqueSensor(m, cfg.dt, seed)) if link_torque else (lambda seed: None)
+    train, _, _ = _arms.record(arm, m, train_motion, gains, cfg, rng, torque_sensor=sensor(11))
+    free, _, _ = _arms.record(arm, m, eval_motion, gains, cfg, rng, torque_sensor=sensor(12))
     train, free = scale_torque(train, torque_scale), scale_torque(free, torque_scale)
     train = drop_rows(train, dropped, 7)  # the scored recording stays whole: a loop's even rate
     scored = {"data": free, "mask": free["t"] >= cfg.evaluation_start}
@@ -536,6 +587,12 @@ def main():
         help="multiply every recorded torque by this (a torque constant or gear ratio off against the URDF)",
     )
     parser.add_argument(
+        "--link-torque",
+        action="store_true",
+        help="the MuJoCo recordings' torque is a link-side joint torque sensor's (rigid-body torque, a constant "
+        "offset and noise) instead of the command",
+    )
+    parser.add_argument(
         "--timing",
         action="store_true",
         help="only time identify on non-repeating recordings of --arms (60 s at 1 kHz by default)",
@@ -616,7 +673,7 @@ def main():
     else:
         points = [] if args.no_baxter else baxter(log, args.torque_scale, stretches["baxter_train"], stretches["baxter_score"])
     for name in args.arms:
-        points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows, args.training_period)
+        points += mujoco_arm(name, log, cfg, args.torque_scale, args.drop_rows, args.training_period, args.link_torque)
     ratios = [p["ratio"] for p in points]
     if not ratios:
         sys.exit("no recording")

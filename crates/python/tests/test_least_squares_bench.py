@@ -85,3 +85,49 @@ def test_the_scored_rows_are_never_the_fitted_ones(tmp_path):
         b.recording_points(**args, score_path=tmp_path / "r.csv")
     with pytest.raises(SystemExit, match=r"--score: 50 rows scored \(at least 100\)"):
         b.recording_points(**args, train_s=(0.0, 5.0), score_s=(5.0, 5.5))
+
+
+def test_the_link_torque_sensor_reads_the_torque_past_the_joint_friction():
+    # `--link-torque`: what a link-side joint torque sensor reads is the command less the
+    # plant's damping, rotor inertia and dry friction (at most its frictionloss), not the command.
+    pytest.importorskip("mujoco", reason="mujoco is not installed (pip install mujoco)")
+    import importlib.metadata
+
+    try:
+        importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    from admittance.mujoco import _arms
+    from admittance.mujoco._plant import MujocoArm
+
+    cfg = _arms.ArmsConfig()
+    path, base, tip = _arms.arm_source("so101", cfg)
+    m = adm.Model.from_urdf(str(path), base=base, tip=tip)
+    arm = MujocoArm(path.read_text(), m.joint_names, tip or m.tip_link, m.effort_limit, cfg.dt, cfg.friction_scale)
+    motion, _ = _arms.excitation_motion(m, 1.0, 1, cfg.dt)
+    gains = _arms.recording_gains(m, motion["q"].mean(axis=0), arm.terms)
+    sensor = bench().LinkTorqueSensor(m, cfg.dt, 1)
+    assert np.array_equal(sensor.offset, bench().LinkTorqueSensor(m, cfg.dt, 2).offset)  # one sensor's offset
+    sensor.noise[:] = 0.0
+    sensor.offset[:] = 0.0
+    steps = []
+
+    def reading(q, qdot, plant, tau):
+        read = sensor(q, qdot, plant, tau)
+        steps.append((read, tau.copy(), qdot.copy(), plant.qdot()))
+        return read
+
+    data = _arms.record(arm, m, motion, gains, cfg, np.random.default_rng(1), torque_sensor=reading)[0]
+    armature = np.array([t["armature"] for t in arm.terms])
+    damping = np.array([t["damping"] for t in arm.terms])
+    friction = np.array([t["frictionloss"] for t in arm.terms])
+    gap = []
+    for read, tau, before, after in steps:
+        # MuJoCo's implicit damping acts on the velocity after the step.
+        rest = tau - read - armature * (after - before) / cfg.dt - damping * after
+        gap.append(np.abs(rest) - friction)
+    gap = np.array(gap)
+    assert gap.max() < 1e-3 * friction.max(), gap.max()
+    differs = np.abs(np.array([s[1] - s[0] for s in steps]))
+    assert differs.max() > 0.5 * friction.max()  # not the command
+    assert data["tau"].shape == data["q"].shape

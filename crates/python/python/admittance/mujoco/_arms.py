@@ -205,26 +205,31 @@ def push_schedule(cfg, m, duration, rng):
     return at, peak, [(w[0], w[1], w[2].tolist()) for w in windows]
 
 
-def record(arm, m, motion, gains, cfg, rng, push=None):
+def record(arm, m, motion, gains, cfg, rng, push=None, torque_sensor=None):
     """The arm tracking ``motion`` under PD: the sensor signals (the free-motion dict of
-    ``adm.train``) and the true external torque ``tau_ext`` ``(N, n)``."""
+    ``adm.train``) and the true external torque ``tau_ext`` ``(N, n)``. The recorded torque is
+    the commanded one, or with ``torque_sensor`` what it reads of each step:
+    ``torque_sensor(q, qdot, arm, tau)`` with the true state before the step and the command."""
     n, dt = m.n, cfg.dt
     steps = len(motion["t"]) - 1
     ctl = adm.PdController(m, gains)
     sensors = Sensors(n, cfg, rng)
     arm.set_q(motion["q"][0])
     tau = np.zeros(n)
+    read = tau
     zeros = np.zeros(n)
     rows = {k: np.zeros((steps, n)) for k in ("q", "qdot", "qddot", "tau", "tau_ext", "q_true")}
     tau_ext = np.zeros(n)
     for k in range(steps):
         t = k * dt
-        q, qdot, qddot, tau_f = sensors.sample(arm.q(), tau)
+        q, qdot, qddot, tau_f = sensors.sample(arm.q(), read)
         rows["q"][k], rows["qdot"][k], rows["qddot"][k], rows["tau"][k] = q, qdot, qddot, tau_f
         rows["tau_ext"][k] = tau_ext  # the torque of the step that led to these samples
         rows["q_true"][k] = arm.q()
         tau = np.array(ctl.step(t, sensors.q_meas, qdot, motion["q"][k], motion["qdot"][k], motion["qddot"][k], zeros, dt))
+        before = (arm.q(), arm.qdot()) if torque_sensor is not None else None
         tau_ext = arm.step(tau, push(t) if push is not None else None)
+        read = tau if torque_sensor is None else torque_sensor(*before, arm, tau)
         if not np.all(np.isfinite(arm.q())):
             raise RuntimeError(f"the recording diverged at t = {t:.3f} s")
     data = {"t": np.arange(steps) * dt, **{k: rows[k] for k in ("q", "qdot", "qddot", "tau")}}
