@@ -24,7 +24,9 @@ package). Per recording and input cut-off (raw signals, 4 Hz, 10 Hz):
    of scored rows where a joint moves faster than the identification's training speeds by more
    than `adm.TRAINING_SPEED_MARGIN` (what the run-time loop flags as faster_than_training) and
    both fits' rms on those joints' samples and on the rest. Where the identification's
-   acceleration gain is below 1, also its rms predicting with the whole measured acceleration.
+   acceleration gain is below 1, also its rms predicting with that gain on every sample (the
+   prediction raises it where the motion accelerates beyond the training's noise) and with
+   the whole measured acceleration.
 
 Recordings: the real Baxter recording (ADMITTANCE_DATA/baxter_rand/baxter_rand.csv: the first
 120 s train, the last 30 s are scored) when it is found, and the example-robot-data arms of
@@ -231,9 +233,13 @@ def compare(label, m, pmodel, train, scored, log):
         tau_id = delay_torque(cs["tau"], delays, (len(t) - 1) / (t[-1] - t[0]))[w]
         project = rms(tau_id - np.asarray(ident.predict(q, qd, qdd)))
         gain = summary_gain = ident.summary["acceleration_gain"]
-        # The same identification predicting with the whole measured acceleration (the gain
-        # chosen on the training motion weights it less).
-        full = project if gain == 1.0 else rms(tau_id - whole_acceleration_prediction(ident, q, qd, qdd))
+        # The same identification predicting with the whole measured acceleration, and with
+        # the gain chosen on the training motion everywhere (predict raises it where the
+        # scored motion accelerates well beyond the training's noise).
+        full = fixed = project
+        if gain < 1.0:
+            still, inertial = gain_variants(ident, q, qd, qdd)
+            full, fixed = rms(tau_id - still - inertial), rms(tau_id - still - gain * inertial)
         ls = LeastSquares(pmodel).fit(ct["q"], ct["qdot"], ct["qddot"], ct["tau"])
         baseline = rms(tau - ls.predict(q, qd, qdd))
         summary = ident.summary
@@ -252,6 +258,7 @@ def compare(label, m, pmodel, train, scored, log):
             "prior_scale": summary.get("prior_scale"),
             "acceleration_gain": summary_gain,
             "project_rms_whole_acceleration": full,
+            "project_rms_fixed_gain": fixed,
         }
         if faster is not None:
             point["faster_than_training"] = faster
@@ -261,22 +268,21 @@ def compare(label, m, pmodel, train, scored, log):
         )
         points.append(point)
         if gain < 1.0:
-            log(f"    acceleration gain {gain:g}; with the whole acceleration {full:.3f} ({full / baseline:.3f} x least squares)")
+            log(f"    acceleration gain {gain:g}: with it everywhere {fixed:.3f} ({fixed / baseline:.3f} x least squares), "
+                f"with the whole acceleration {full:.3f} ({full / baseline:.3f} x)")
         if faster is not None:
             log("    " + speed_flag_text(faster))
     return points
 
 
-def whole_acceleration_prediction(ident, q, qd, qdd):
-    """``ident.predict`` with the acceleration gain taken as 1: its prediction without the
-    acceleration plus the whole inertial torque (``M q''`` and the rotor inertias)."""
+def gain_variants(ident, q, qd, qdd):
+    """The identification's prediction without the acceleration and its whole inertial torque
+    (``M q''`` and the rotor inertias): with a share ``g`` of ``q''`` it predicts
+    ``still + g inertial``."""
     still = np.asarray(ident.predict(q, qd, np.zeros_like(qdd)))
-    gain = ident.summary["acceleration_gain"]
-    if gain > 0.0:
-        return still + (np.asarray(ident.predict(q, qd, qdd)) - still) / gain
     rotor = np.array([t["armature"] for t in ident.joint_terms])
     inertial = np.array([np.asarray(adm.crba(ident.model, a)) @ b for a, b in zip(q, qdd)])
-    return still + inertial + rotor * qdd
+    return still, inertial + rotor * qdd
 
 
 def speed_flags(ident, qdot, error, baseline_error):

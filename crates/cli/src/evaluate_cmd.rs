@@ -271,6 +271,16 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
         vec![0.0; 3 * n],
     );
     let mut data_ident = ident.as_ref().map(|i| Data::new(&i.model));
+    // The share of `q''` the identification's predictions take follows the motion from its
+    // first row (`AccelerationGains`), at the identification's sample rate.
+    let mut acceleration_gains = ident.as_ref().map(|i| {
+        let mut gains = admittance_dynamics::AccelerationGains::new(&i.summary, None);
+        let mut g = vec![0.0; n];
+        for k in 0..first {
+            gains.update(&rows.qddot[k * n..(k + 1) * n], &mut g);
+        }
+        (gains, g)
+    });
     let mut ws = networks
         .first()
         .map(|(_, m)| m.workspace())
@@ -312,8 +322,11 @@ pub fn evaluate(args: &EvaluateArgs) -> Result<(), CliError> {
             diff(tau_id, rigid.as_slice(), &mut out);
             statics[s].add(&out);
             s += 1;
-            id.predict(d, q, qd, qdd, &mut est)
-                .map_err(|e| CliError::input(e.to_string()))?;
+            if let Some((gains, g)) = acceleration_gains.as_mut() {
+                gains.update(qdd, g);
+                id.predict_with_gains(d, q, qd, qdd, g, &mut est)
+                    .map_err(|e| CliError::input(e.to_string()))?;
+            }
             diff(tau_id, &est, &mut out);
             statics[s].add(&out);
             s += 1;

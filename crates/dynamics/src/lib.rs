@@ -55,12 +55,12 @@ pub use error::{DimensionError, DynamicsError, LoadWarning, UrdfError};
 pub use identification::{
     beyond_training_range, beyond_training_range_of, beyond_training_speed, excitation,
     faster_than_training, identify, identify_payload, is_physically_consistent,
-    outside_training_range, BaseParameters, Excitation, ExcitationSettings, FourierSeries,
-    Identification, IdentificationFile, IdentificationSettings, IdentificationSummary, JointTerms,
-    LimitUse, RangeExcursion, Samples, SpeedExcursion, COULOMB_WIDTH_CANDIDATES,
-    DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION, DEFAULT_VELOCITY_LIMIT, FIT_ACCELERATION_HZ,
-    IDENTIFICATION_FORMAT, IDENTIFICATION_FORMAT_VERSION, TRAINING_RANGE_MARGIN,
-    TRAINING_SPEED_MARGIN,
+    outside_training_range, AccelerationGains, BaseParameters, Excitation, ExcitationSettings,
+    FourierSeries, Identification, IdentificationFile, IdentificationSettings,
+    IdentificationSummary, JointTerms, LimitUse, RangeExcursion, Samples, SpeedExcursion,
+    COULOMB_WIDTH_CANDIDATES, DEFAULT_EXCITATION_RANGE, DEFAULT_LIMIT_FRACTION,
+    DEFAULT_VELOCITY_LIMIT, FIT_ACCELERATION_HZ, IDENTIFICATION_FORMAT,
+    IDENTIFICATION_FORMAT_VERSION, TRAINING_RANGE_MARGIN, TRAINING_SPEED_MARGIN,
 };
 pub use model::{
     DroppedBranch, Frame, Joint, JointKind, JointLimits, LinkMass, LockedBranch, Model, Payload,

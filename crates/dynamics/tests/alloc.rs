@@ -65,11 +65,24 @@ fn identified_prediction_and_joint_terms_do_not_allocate() {
     let v = [0.5, -0.3, 0.2, 0.4, -0.6, 0.1, 0.9];
     let mut out = [0.0; 7];
     ident.predict(&mut data, &q, &v, &v, &mut out).unwrap();
+    // A gain below 1 with the training's acceleration power: the gain follows the motion.
+    let mut summary = ident.summary.clone();
+    summary.acceleration_gain = 0.3;
+    summary.acceleration_power = vec![0.01; 7];
+    summary.settings.sample_rate_hz = Some(1000.0);
+    let mut gains = AccelerationGains::new(&summary, None);
+    let mut g = [0.0; 7];
     let count = count_allocations(|| {
         for _ in 0..100 {
             ident.predict(&mut data, &q, &v, &v, &mut out).unwrap();
             ident.joint_friction_torque(&q, &v, &mut out).unwrap();
+            gains.update(&v, &mut g);
+            ident
+                .predict_with_gains(&mut data, &q, &v, &v, &g, &mut out)
+                .unwrap();
         }
     });
     assert_eq!(count, 0);
+    // The joints accelerating far above the noise rose within the 0.1 s; none fell below.
+    assert!(g.iter().all(|&x| x >= 0.3) && g[6] > 0.3, "{g:?}");
 }

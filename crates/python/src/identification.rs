@@ -292,6 +292,10 @@ impl PyIdentification {
     }
 
     /// The torque (N m) the identified arm needs: `(n,)` for one state, `(N, n)` for rows.
+    /// Rows are consecutive samples of one motion at the identification's rate: the share of
+    /// `qddot` taken rises above `summary["acceleration_gain"]` where that motion accelerates
+    /// well beyond the training motion's noise (docs/method.md section 8); one state takes
+    /// the gain itself.
     fn predict<'py>(
         &self,
         py: Python<'py>,
@@ -311,18 +315,15 @@ impl PyIdentification {
                 "`q`, `qdot` and `qddot` have {rq}, {rqd} and {rqdd} rows"
             )));
         }
-        let mut data = Data::new(&self.identification.model);
         let mut out = vec![0.0; rq * n];
-        for k in 0..rq {
-            let r = k * n..(k + 1) * n;
+        if single {
+            let mut data = Data::new(&self.identification.model);
             self.identification
-                .predict(
-                    &mut data,
-                    &q[r.clone()],
-                    &qd[r.clone()],
-                    &qdd[r.clone()],
-                    &mut out[r],
-                )
+                .predict(&mut data, &q, &qd, &qdd, &mut out)
+                .map_err(|e| value_error(e.to_string()))?;
+        } else {
+            self.identification
+                .predict_motion(&q, &qd, &qdd, &mut out)
                 .map_err(|e| value_error(e.to_string()))?;
         }
         if single {

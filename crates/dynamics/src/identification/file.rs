@@ -317,6 +317,23 @@ fn check_summary(s: &IdentificationSummary, n: usize) -> Result<(), String> {
             s.acceleration_gain
         ));
     }
+    if !(s.acceleration_power.is_empty() || s.acceleration_power.len() == n) {
+        return Err(format!(
+            "summary.acceleration_power has {} values for {n} joints",
+            s.acceleration_power.len()
+        ));
+    }
+    if let Some((j, p)) = s
+        .acceleration_power
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !(p.is_finite() && **p >= 0.0))
+    {
+        return Err(format!(
+            "summary.acceleration_power[{j}] is {}: must be a finite mean square >= 0",
+            short(*p)
+        ));
+    }
     if !(s.prior_scale > 0.0 && s.prior_scale.is_finite()) {
         return Err(format!(
             "summary.prior_scale is {}: must be a finite positive factor",

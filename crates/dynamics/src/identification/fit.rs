@@ -292,11 +292,27 @@ pub fn identify(
         prior_scale,
         training_range: range,
         training_speed: training_speed(train),
+        // The motion the gain was chosen on: the validation recording, or the training's.
+        acceleration_power: mean_square(validation.unwrap_or(train).qddot, n),
     };
     Ok(Identification {
         summary,
         ..identified
     })
+}
+
+/// Per column of rows of `n` values, the mean square of its finite values.
+fn mean_square(values: &[f64], n: usize) -> Vec<f64> {
+    let mut sums = vec![(0.0, 0usize); n];
+    for row in values.chunks_exact(n.max(1)) {
+        for (s, &v) in sums.iter_mut().zip(row) {
+            if v.is_finite() {
+                s.0 += v * v;
+                s.1 += 1;
+            }
+        }
+    }
+    sums.iter().map(|&(s, c)| s / c.max(1) as f64).collect()
 }
 
 /// `samples` with the fit's acceleration in place of the measured one, when there is one.

@@ -14,6 +14,7 @@
 //! println!("expected false torque per joint (N m): {:?}", ident.summary.expected_false_torque_rms);
 //! ```
 
+mod acceleration_gain;
 mod base;
 mod cholesky;
 mod consistency;
@@ -36,6 +37,7 @@ mod training_range;
 mod training_speed;
 mod urdf_torques;
 
+pub use acceleration_gain::AccelerationGains;
 pub use base::BaseParameters;
 pub use consistency::is_physically_consistent;
 pub use excitation::{
@@ -163,6 +165,13 @@ pub struct IdentificationSummary {
     /// (and in files written before it existed).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub fit_acceleration_hz: f64,
+    /// Per joint, the mean square of the measured (conditioned) `q''` over the training
+    /// samples ((rad/s^2)^2; empty: not recorded, as in older files). With
+    /// `acceleration_gain` it gives the noise power `(1 - gain) P` against which predictions
+    /// over a motion raise the gain where that motion accelerates well beyond the noise
+    /// ([`AccelerationGains`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub acceleration_power: Vec<f64>,
 }
 
 fn unit_gain() -> f64 {
@@ -202,14 +211,13 @@ impl Identification {
         let n = self.model.nq();
         let mut data = Data::new(&self.model);
         let mut out = vec![0.0; n];
+        // The rows are one motion in time order: the gain on `q''` follows it.
+        let mut gains = AccelerationGains::new(&self.summary, None);
+        let mut g = vec![0.0; n];
         for (row, target) in inputs.chunks_exact(3 * n).zip(torques.chunks_exact_mut(n)) {
-            self.predict(
-                &mut data,
-                &row[..n],
-                &row[n..2 * n],
-                &row[2 * n..],
-                &mut out,
-            )?;
+            let (q, qd, qdd) = (&row[..n], &row[n..2 * n], &row[2 * n..]);
+            gains.update(qdd, &mut g);
+            self.predict_with_gains(&mut data, q, qd, qdd, &g, &mut out)?;
             target.iter_mut().zip(&out).for_each(|(t, m)| *t -= m);
         }
         Ok(())
@@ -246,18 +254,72 @@ impl Identification {
         qddot: &[f64],
         out: &mut [f64],
     ) -> Result<(), DimensionError> {
+        let gain = self.summary.acceleration_gain;
+        self.predict_at(data, q, qdot, qddot, |_| gain, out)
+    }
+
+    /// [`predict`](Self::predict) with each joint's own share of the measured acceleration,
+    /// `gains` (from [`AccelerationGains`] over a motion). Allocation-free.
+    pub fn predict_with_gains(
+        &self,
+        data: &mut Data,
+        q: &[f64],
+        qdot: &[f64],
+        qddot: &[f64],
+        gains: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), DimensionError> {
+        check_len("gains", gains, self.model.nq())?;
+        self.predict_at(data, q, qdot, qddot, |i| gains[i], out)
+    }
+
+    fn predict_at(
+        &self,
+        data: &mut Data,
+        q: &[f64],
+        qdot: &[f64],
+        qddot: &[f64],
+        gain: impl Fn(usize) -> f64,
+        out: &mut [f64],
+    ) -> Result<(), DimensionError> {
         let n = self.model.nq();
         check_len("out", out, n)?;
         check_len("qddot", qddot, n)?;
-        let gain = self.summary.acceleration_gain;
         // The gain goes through `out` as the acceleration buffer: no allocation.
-        for (o, a) in out.iter_mut().zip(qddot) {
-            *o = gain * a;
+        for (i, (o, a)) in out.iter_mut().zip(qddot).enumerate() {
+            *o = gain(i) * a;
         }
         let tau = rnea(&self.model, data, q, qdot, out)?;
         for (i, o) in out.iter_mut().enumerate() {
-            let qdd = gain * qddot[i];
+            let qdd = gain(i) * qddot[i];
             *o = tau[i] + self.joint_terms[i].torque(q[i], qdot[i], qdd);
+        }
+        Ok(())
+    }
+
+    /// The predictions of consecutive samples of one motion (rows of `n`, in time order, at
+    /// the identification's sample rate): [`predict`](Self::predict) with the gain on `q''`
+    /// raised where the motion accelerates well beyond the training's noise
+    /// ([`AccelerationGains`]), into `out`.
+    pub fn predict_motion(
+        &self,
+        q: &[f64],
+        qdot: &[f64],
+        qddot: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), DimensionError> {
+        let n = self.model.nq();
+        for (name, v) in [("q", q), ("qdot", qdot), ("qddot", qddot)] {
+            check_len(name, v, out.len())?;
+        }
+        let mut data = Data::new(&self.model);
+        let mut gains = AccelerationGains::new(&self.summary, None);
+        let mut g = vec![0.0; n];
+        for k in 0..out.len() / n.max(1) {
+            let r = k * n..(k + 1) * n;
+            gains.update(&qddot[r.clone()], &mut g);
+            let (q, qd, qdd) = (&q[r.clone()], &qdot[r.clone()], &qddot[r.clone()]);
+            self.predict_with_gains(&mut data, q, qd, qdd, &g, &mut out[r])?;
         }
         Ok(())
     }
@@ -331,9 +393,12 @@ impl Identification {
         let mut data = Data::new(&self.model);
         let mut out = vec![0.0; n];
         let mut sq = vec![0.0; n];
+        let mut gains = AccelerationGains::new(&self.summary, None);
+        let mut g = vec![0.0; n];
         for k in 0..samples.len() {
             let (q, qd, qdd, tau) = samples.row(k);
-            self.predict(&mut data, q, qd, qdd, &mut out)?;
+            gains.update(qdd, &mut g);
+            self.predict_with_gains(&mut data, q, qd, qdd, &g, &mut out)?;
             for i in 0..n {
                 sq[i] += (out[i] - tau[i]).powi(2);
             }
@@ -373,6 +438,7 @@ impl IdentificationSummary {
             training_range: Vec::new(),
             training_speed: Vec::new(),
             fit_acceleration_hz: 0.0,
+            acceleration_power: Vec::new(),
         }
     }
 }

@@ -15,6 +15,7 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 
+use super::acceleration_gain::AccelerationGains;
 use super::consistency::{margin, project};
 use super::constrained::fit_possible_body;
 use super::{Identification, Samples};
@@ -88,13 +89,16 @@ fn triangular_system(
     let (body, to_body) = tip_body(model)?;
     let mut data = Data::new(model);
     let mut predicted = vec![0.0; n];
+    let mut gains = AccelerationGains::new(&ident.summary, None);
+    let mut g = vec![0.0; n];
     let width = PARAMETERS_PER_BODY + 1;
     let mut stack = DMatrix::<f64>::zeros(width + BLOCK * n, width);
     let mut rows = width;
     let mut y = DMatrix::<f64>::zeros(n, PARAMETERS_PER_BODY);
     for k in 0..samples.len() {
         let (q, qd, qdd, tau) = samples.row(k);
-        ident.predict(&mut data, q, qd, qdd, &mut predicted)?;
+        gains.update(qdd, &mut g);
+        ident.predict_with_gains(&mut data, q, qd, qdd, &g, &mut predicted)?;
         let full = joint_torque_regressor(model, &mut data, q, qd, qdd)?;
         y.copy_from(&full.columns(PARAMETERS_PER_BODY * body, PARAMETERS_PER_BODY));
         let yt = &y * &to_body;

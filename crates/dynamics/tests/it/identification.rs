@@ -656,3 +656,76 @@ fn a_noisy_acceleration_does_not_bias_the_fit() {
         "smoothed {smoothed:.3} N m against {as_measured:.3} as measured"
     );
 }
+
+/// `qdd` with uniform pseudo-noise of +-`amplitude` rad/s^2 (`frequency` picks the sequence).
+fn with_noise(qdd: &[f64], frequency: f64, amplitude: f64) -> Vec<f64> {
+    qdd.iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let uniform = ((k as f64 * frequency).sin() * 43758.5453).rem_euclid(1.0);
+            a + amplitude * (2.0 * uniform - 1.0)
+        })
+        .collect()
+}
+
+/// Trained on slow motion whose recorded acceleration is mostly noise, the held-out gain on
+/// `q''` is small; over faster motion `predict_motion` takes more of it where the motion
+/// accelerates well beyond that noise, and stays near the gain on motion as slow as the
+/// training's.
+#[test]
+fn the_acceleration_gain_rises_on_motion_faster_than_the_training() {
+    let urdf = common::baxter();
+    let truth = heavier_baxter(&urdf);
+    let terms = truth_terms(7);
+    // Seed -2.5: a quarter of the speed of seed 0 (the motion's frequencies scale with it).
+    let (q, qd, qdd) = motion(&urdf, -2.5, 40.0);
+    let tau = torques(&truth, &terms, &q, &qd, &qdd);
+    let noisy = with_noise(&qdd, 12.9898, 0.5);
+    let train = Samples {
+        q: &q,
+        qdot: &qd,
+        qddot: &noisy,
+        tau: &tau,
+        dof: 7,
+    };
+    let settings = IdentificationSettings {
+        sample_rate_hz: Some(200.0),
+        ..Default::default()
+    };
+    let ident = identify(&urdf, &train, None, &settings).unwrap();
+    let gain = ident.summary.acceleration_gain;
+    assert!(gain < 0.5, "gain {gain}");
+    assert_eq!(ident.summary.acceleration_power.len(), 7);
+    let errors = |seed: f64| {
+        let (q2, qd2, qdd2) = motion(&urdf, seed, 20.0);
+        let want = torques(&truth, &terms, &q2, &qd2, &qdd2);
+        let measured = with_noise(&qdd2, 78.233, 0.5);
+        let mut data = Data::new(&ident.model);
+        let mut fixed = vec![0.0; q2.len()];
+        for (k, out) in fixed.chunks_exact_mut(7).enumerate() {
+            let r = 7 * k..7 * (k + 1);
+            ident
+                .predict(
+                    &mut data,
+                    &q2[r.clone()],
+                    &qd2[r.clone()],
+                    &measured[r],
+                    out,
+                )
+                .unwrap();
+        }
+        let mut motion_wise = vec![0.0; q2.len()];
+        ident
+            .predict_motion(&q2, &qd2, &measured, &mut motion_wise)
+            .unwrap();
+        (rms(&fixed, &want), rms(&motion_wise, &want))
+    };
+    let (fixed, rising) = errors(1.0);
+    eprintln!(
+        "gain {gain}; faster motion: {fixed:.3} N m with the gain, {rising:.3} over the motion"
+    );
+    assert!(rising < 0.5 * fixed, "{rising:.3} against {fixed:.3}");
+    let (fixed, rising) = errors(-2.4);
+    eprintln!("motion as slow: {fixed:.3} N m with the gain, {rising:.3} over the motion");
+    assert!(rising < 1.02 * fixed, "{rising:.3} against {fixed:.3}");
+}

@@ -133,6 +133,19 @@ fn what_consumers_take_from_the_summary_is_checked() {
     })
     .unwrap_err();
     assert!(e.contains("summary.acceleration_gain is 3"), "{e}");
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["acceleration_power"] = serde_json::json!([1.0, -2.0, 0, 0, 0, 0, 0])
+    })
+    .unwrap_err();
+    assert!(e.contains("summary.acceleration_power[1] is -2"), "{e}");
+    let e = load_edited(dir.path(), |p| {
+        p["summary"]["acceleration_power"] = serde_json::json!([1.0])
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("summary.acceleration_power has 1 values for 7 joints"),
+        "{e}"
+    );
     let e = load_edited(dir.path(), |p| p["summary"]["prior_scale"] = (-1.0).into()).unwrap_err();
     assert!(e.contains("summary.prior_scale is -1"), "{e}");
     let e = load_edited(dir.path(), |p| {

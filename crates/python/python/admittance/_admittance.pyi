@@ -664,7 +664,10 @@ class Identification:
         """Chosen settings and the expected false torque per joint (N m rms) on motion it was
         not trained on."""
     def predict(self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> FloatArray:
-        """The torque the identified arm needs: ``(n,)`` or ``(N, n)`` rows."""
+        """The torque the identified arm needs: ``(n,)`` or ``(N, n)`` rows. Rows are
+        consecutive samples of one motion at the identification's rate: the share of
+        ``qddot`` taken rises above ``summary["acceleration_gain"]`` where the motion
+        accelerates well beyond the training motion's noise; one state takes the gain."""
     def range_excursions(self, q: ArrayLike) -> List[dict]:
         """Per joint, how the positions ``q`` (``(n,)`` or ``(N, n)``, conditioned as the
         identification was) leave ``summary["training_range"]``: ``samples_outside``,
