@@ -165,8 +165,9 @@ pub struct IdentificationSummary {
     /// (and in files written before it existed).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub fit_acceleration_hz: f64,
-    /// Per joint, the mean square of the measured (conditioned) `q''` over the training
-    /// samples ((rad/s^2)^2; empty: not recorded, as in older files). With
+    /// Per joint, the mean square of the measured (conditioned) `q''` on the motion the
+    /// gain was chosen on: the validation samples when given, else the training samples
+    /// ((rad/s^2)^2; empty: not recorded, as in older files). With
     /// `acceleration_gain` it gives the noise power `(1 - gain) P` against which predictions
     /// over a motion raise the gain where that motion accelerates well beyond the noise
     /// ([`AccelerationGains`]).

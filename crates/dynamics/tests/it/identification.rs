@@ -612,14 +612,7 @@ fn a_noisy_acceleration_does_not_bias_the_fit() {
     let (q, qd, qdd) = motion(&urdf, 0.3, 40.0);
     let tau = torques(&truth, &terms, &q, &qd, &qdd);
     // Uniform pseudo-noise of +-5 rad/s^2 on every recorded acceleration.
-    let noisy: Vec<f64> = qdd
-        .iter()
-        .enumerate()
-        .map(|(k, a)| {
-            let uniform = ((k as f64 * 12.9898).sin() * 43758.5453).rem_euclid(1.0);
-            a + 5.0 * (2.0 * uniform - 1.0)
-        })
-        .collect();
+    let noisy = with_noise(&qdd, 12.9898, 5.0);
     let train = Samples {
         q: &q,
         qdot: &qd,
