@@ -22,8 +22,9 @@ use crate::spec::Scenario;
 /// convex physical fit of issue 30, whose results differ from the first fit's; 3: springs
 /// kept within the effort limit over the joint's range; 4: springs continued along their
 /// tangent beyond the training range; 5: the training speeds recorded, which the loop flags
-/// motion beyond; 6: the fit regresses on a zero-phase smoothed acceleration).
-const IDENTIFICATION_KEY_VERSION: u32 = 6;
+/// motion beyond; 6: the fit regresses on a zero-phase smoothed acceleration; 7: the
+/// acceleration's mean square recorded, over which predictions raise the acceleration gain).
+const IDENTIFICATION_KEY_VERSION: u32 = 7;
 
 /// An identification of the scenario's arm, and the file the loop loads it from.
 pub struct IdentifiedNominal {
