@@ -609,17 +609,9 @@ fn a_noisy_acceleration_does_not_bias_the_fit() {
     let urdf = common::baxter();
     let truth = heavier_baxter(&urdf);
     let terms = truth_terms(7);
-    let (q, qd, qdd) = motion(&urdf, 0.3, 40.0);
-    let tau = torques(&truth, &terms, &q, &qd, &qdd);
     // Uniform pseudo-noise of +-5 rad/s^2 on every recorded acceleration.
-    let noisy = with_noise(&qdd, 12.9898, 5.0);
-    let train = Samples {
-        q: &q,
-        qdot: &qd,
-        qddot: &noisy,
-        tau: &tau,
-        dof: 7,
-    };
+    let recording = noisy_acceleration_recording(&urdf, &truth, 0.3, 5.0);
+    let train = samples(&recording);
     let (q2, qd2, _) = motion(&urdf, 0.7, 20.0);
     let zero = vec![0.0; q2.len()];
     let want = torques(&truth, &terms, &q2, &qd2, &zero);
@@ -650,6 +642,20 @@ fn a_noisy_acceleration_does_not_bias_the_fit() {
     );
 }
 
+/// 40 s of the motion of `seed` and `truth`'s torques, the recorded acceleration carrying
+/// uniform pseudo-noise of +-`amplitude` rad/s^2: `[q, qdot, qddot, tau]`.
+fn noisy_acceleration_recording(
+    urdf: &Model,
+    truth: &Model,
+    seed: f64,
+    amplitude: f64,
+) -> [Vec<f64>; 4] {
+    let (q, qd, qdd) = motion(urdf, seed, 40.0);
+    let tau = torques(truth, &truth_terms(7), &q, &qd, &qdd);
+    let noisy = with_noise(&qdd, 12.9898, amplitude);
+    [q, qd, noisy, tau]
+}
+
 /// `qdd` with uniform pseudo-noise of +-`amplitude` rad/s^2 (`frequency` picks the sequence).
 fn with_noise(qdd: &[f64], frequency: f64, amplitude: f64) -> Vec<f64> {
     qdd.iter()
@@ -671,16 +677,8 @@ fn the_acceleration_gain_rises_on_motion_faster_than_the_training() {
     let truth = heavier_baxter(&urdf);
     let terms = truth_terms(7);
     // Seed -2.5: a quarter of the speed of seed 0 (the motion's frequencies scale with it).
-    let (q, qd, qdd) = motion(&urdf, -2.5, 40.0);
-    let tau = torques(&truth, &terms, &q, &qd, &qdd);
-    let noisy = with_noise(&qdd, 12.9898, 0.5);
-    let train = Samples {
-        q: &q,
-        qdot: &qd,
-        qddot: &noisy,
-        tau: &tau,
-        dof: 7,
-    };
+    let recording = noisy_acceleration_recording(&urdf, &truth, -2.5, 0.5);
+    let train = samples(&recording);
     let settings = IdentificationSettings {
         sample_rate_hz: Some(200.0),
         ..Default::default()
@@ -693,25 +691,15 @@ fn the_acceleration_gain_rises_on_motion_faster_than_the_training() {
         let (q2, qd2, qdd2) = motion(&urdf, seed, 20.0);
         let want = torques(&truth, &terms, &q2, &qd2, &qdd2);
         let measured = with_noise(&qdd2, 78.233, 0.5);
-        let mut data = Data::new(&ident.model);
-        let mut fixed = vec![0.0; q2.len()];
-        for (k, out) in fixed.chunks_exact_mut(7).enumerate() {
-            let r = 7 * k..7 * (k + 1);
-            ident
-                .predict(
-                    &mut data,
-                    &q2[r.clone()],
-                    &qd2[r.clone()],
-                    &measured[r],
-                    out,
-                )
-                .unwrap();
-        }
+        let fixed = prediction_error(
+            &ident,
+            &[q2.clone(), qd2.clone(), measured.clone(), want.clone()],
+        );
         let mut motion_wise = vec![0.0; q2.len()];
         ident
             .predict_motion(&q2, &qd2, &measured, &mut motion_wise)
             .unwrap();
-        (rms(&fixed, &want), rms(&motion_wise, &want))
+        (fixed, rms(&motion_wise, &want))
     };
     let (fixed, rising) = errors(1.0);
     eprintln!(
