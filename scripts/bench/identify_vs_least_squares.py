@@ -232,7 +232,7 @@ def compare(label, m, pmodel, train, scored, log):
         delays = list(ident.summary.get("delay_s") or [])
         tau_id = delay_torque(cs["tau"], delays, (len(t) - 1) / (t[-1] - t[0]))[w]
         project = rms(tau_id - np.asarray(ident.predict(q, qd, qdd)))
-        gain = summary_gain = ident.summary["acceleration_gain"]
+        gain = ident.summary["acceleration_gain"]
         # The same identification predicting with the whole measured acceleration, and with
         # the gain chosen on the training motion everywhere (predict raises it where the
         # scored motion accelerates well beyond the training's noise).
@@ -256,7 +256,7 @@ def compare(label, m, pmodel, train, scored, log):
             "chosen_input_filter_hz": summary.get("input_filter_hz"),
             "delay_s": summary.get("delay_s"),
             "prior_scale": summary.get("prior_scale"),
-            "acceleration_gain": summary_gain,
+            "acceleration_gain": gain,
             "project_rms_whole_acceleration": full,
             "project_rms_fixed_gain": fixed,
         }
